@@ -1,0 +1,489 @@
+//! A deformable body: rest mesh, element model and struct-of-arrays node state.
+
+use super::contact::ContactMaterial;
+use super::error::BuildError;
+use super::material::{Material, Resolved, Stiffness};
+use super::math::{self, AngVector, Real, Rotation, Vector, DIM};
+use super::mesh::{CellKind, Mesh};
+use super::model::{Accumulator, ElementModel, ModelState};
+use super::rapier::dynamics::CoefficientCombineRule;
+use super::rapier::geometry::InteractionGroups;
+use super::report::DeformableReport;
+
+/// A deformable body.
+///
+/// Node state is kept as separate arrays (positions, velocities, masses), so the element loops
+/// stream through memory. Build one with [`DeformableBuilder`].
+#[derive(Clone, Debug)]
+pub struct Deformable {
+    pub(crate) mesh: Mesh,
+    pub(crate) model: ElementModel,
+    pub(crate) params: Resolved,
+    pub(crate) state: ModelState,
+    pub(crate) positions: Vec<Vector>,
+    pub(crate) velocities: Vec<Vector>,
+    pub(crate) masses: Vec<Real>,
+    pub(crate) inv_masses: Vec<Real>,
+    pub(crate) acc: Accumulator,
+    /// Whether `acc` holds the forces at the current state.
+    pub(crate) forces_valid: bool,
+    /// The crossing limiter's bound at the current state.
+    pub(crate) limiter: Real,
+    pub(crate) contact: ContactMaterial,
+    pub(crate) gravity_scale: Real,
+    pub(crate) frozen: bool,
+    pub(crate) report: DeformableReport,
+    pub(crate) saved_positions: Vec<Vector>,
+    pub(crate) saved_velocities: Vec<Vector>,
+    pub(crate) scratch_velocities: Vec<Vector>,
+    /// Free for the user.
+    pub user_data: u128,
+}
+
+impl Deformable {
+    /// The rest mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The element model.
+    pub fn model(&self) -> ElementModel {
+        self.model
+    }
+
+    /// The material.
+    pub fn material(&self) -> Material {
+        self.params.material
+    }
+
+    /// The stiffness form.
+    pub fn stiffness(&self) -> Stiffness {
+        self.params.stiffness
+    }
+
+    /// Node positions.
+    pub fn positions(&self) -> &[Vector] {
+        &self.positions
+    }
+
+    /// Node velocities.
+    pub fn velocities(&self) -> &[Vector] {
+        &self.velocities
+    }
+
+    /// Node masses (lumped: each cell's mass shared equally by its vertices).
+    pub fn masses(&self) -> &[Real] {
+        &self.masses
+    }
+
+    /// Number of nodes.
+    pub fn num_nodes(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Total mass.
+    pub fn total_mass(&self) -> Real {
+        self.masses.iter().sum()
+    }
+
+    /// Centre of mass.
+    pub fn center_of_mass(&self) -> Vector {
+        let mut s = Vector::ZERO;
+        for (x, m) in self.positions.iter().zip(&self.masses) {
+            s += *x * *m;
+        }
+        s / self.total_mass()
+    }
+
+    /// Velocity of the centre of mass.
+    pub fn center_of_mass_velocity(&self) -> Vector {
+        self.linear_momentum() / self.total_mass()
+    }
+
+    /// Total linear momentum `Σ m v`.
+    pub fn linear_momentum(&self) -> Vector {
+        let mut s = Vector::ZERO;
+        for (v, m) in self.velocities.iter().zip(&self.masses) {
+            s += *v * *m;
+        }
+        s
+    }
+
+    /// Total angular momentum about the origin `Σ x × m v`.
+    pub fn angular_momentum(&self) -> AngVector {
+        let mut s = math::ANG_ZERO;
+        for ((x, v), m) in self
+            .positions
+            .iter()
+            .zip(&self.velocities)
+            .zip(&self.masses)
+        {
+            s += math::cross(*x, *v * *m);
+        }
+        s
+    }
+
+    /// Kinetic energy `Σ ½ m v²`.
+    pub fn kinetic_energy(&self) -> Real {
+        self.velocities
+            .iter()
+            .zip(&self.masses)
+            .map(|(v, m)| 0.5 * m * v.length_squared())
+            .sum()
+    }
+
+    /// Elastic energy stored in the elements.
+    pub fn elastic_energy(&self) -> Real {
+        self.state.elastic_energy(&self.positions)
+    }
+
+    /// Number of cells that are collapsed or inverted now (quality ≤ 0).
+    pub fn inverted_elements(&self) -> usize {
+        (0..self.mesh.num_cells())
+            .filter(|&c| self.mesh.cell_quality(c, &self.positions) <= 0.0)
+            .count()
+    }
+
+    /// The smallest cell quality (volume ratio) now.
+    pub fn min_volume_ratio(&self) -> Real {
+        (0..self.mesh.num_cells())
+            .map(|c| self.mesh.cell_quality(c, &self.positions))
+            .fold(Real::INFINITY, Real::min)
+    }
+
+    /// The element (internal) forces at the current state, without gravity or contacts.
+    ///
+    /// For the shape-based model this also advances its warm-started rotation estimates, as a
+    /// substep would.
+    pub fn element_forces(&mut self) -> &[Vector] {
+        self.acc.clear();
+        self.limiter = self
+            .state
+            .accumulate(&self.positions, &self.velocities, &mut self.acc);
+        self.forces_valid = true;
+        &self.acc.force
+    }
+
+    /// The report of the last step.
+    pub fn report(&self) -> &DeformableReport {
+        &self.report
+    }
+
+    /// Whether the body is frozen (after its state turned non-finite). A frozen body is not
+    /// simulated; [`Deformable::unfreeze`] resumes it.
+    pub fn is_frozen(&self) -> bool {
+        self.frozen
+    }
+
+    /// Resumes a frozen body.
+    pub fn unfreeze(&mut self) {
+        self.frozen = false;
+        self.forces_valid = false;
+    }
+
+    /// Sets all node positions. Errors if the count differs or a coordinate is not finite; the
+    /// state is unchanged then.
+    pub fn set_positions(&mut self, positions: &[Vector]) -> Result<(), BuildError> {
+        check_state(positions, self.positions.len())?;
+        self.positions.copy_from_slice(positions);
+        self.forces_valid = false;
+        Ok(())
+    }
+
+    /// Sets all node velocities. Errors if the count differs or a component is not finite; the
+    /// state is unchanged then.
+    pub fn set_velocities(&mut self, velocities: &[Vector]) -> Result<(), BuildError> {
+        check_state(velocities, self.velocities.len())?;
+        self.velocities.copy_from_slice(velocities);
+        self.forces_valid = false;
+        Ok(())
+    }
+
+    /// Gives every node the same velocity.
+    pub fn set_uniform_velocity(&mut self, velocity: Vector) -> Result<(), BuildError> {
+        check_state(&[velocity], 1)?;
+        self.velocities.fill(velocity);
+        self.forces_valid = false;
+        Ok(())
+    }
+}
+
+fn check_state(values: &[Vector], expected: usize) -> Result<(), BuildError> {
+    if values.len() != expected {
+        return Err(BuildError::InvalidParameter {
+            name: "node state length",
+            value: values.len() as Real,
+            expected: "one value per node",
+        });
+    }
+    if let Some((node, p)) = values.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+        return Err(BuildError::NonFiniteCoordinate {
+            node,
+            coordinates: (0..DIM).map(|d| p[d]).collect(),
+        });
+    }
+    Ok(())
+}
+
+enum Source {
+    Mesh(Mesh),
+    Cuboid {
+        half_extents: Vector,
+        resolution: [usize; DIM],
+    },
+}
+
+/// Builds a [`Deformable`], rapier-style: a named constructor, then `mut self -> Self`
+/// setters, then [`DeformableBuilder::build`], which validates everything and returns a
+/// typed [`BuildError`] instead of panicking.
+#[must_use = "a builder does nothing until `.build()` is called"]
+pub struct DeformableBuilder {
+    source: Source,
+    cells: CellKind,
+    model: ElementModel,
+    material: Material,
+    stiffness: Stiffness,
+    translation: Vector,
+    rotation: Rotation,
+    linvel: Vector,
+    friction: Real,
+    restitution: Real,
+    friction_combine_rule: CoefficientCombineRule,
+    restitution_combine_rule: CoefficientCombineRule,
+    gravity_scale: Real,
+    groups: InteractionGroups,
+    user_data: u128,
+}
+
+impl DeformableBuilder {
+    /// A deformable over an existing rest mesh.
+    pub fn new(mesh: Mesh) -> Self {
+        Self::with_source(Source::Mesh(mesh))
+    }
+
+    /// A box lattice `[-half_extents, half_extents]` with `resolution[d]` nodes along axis `d`
+    /// (see [`Mesh::cuboid`]); simplex cells unless [`DeformableBuilder::cells`] says otherwise.
+    pub fn cuboid(half_extents: Vector, resolution: [usize; DIM]) -> Self {
+        Self::with_source(Source::Cuboid {
+            half_extents,
+            resolution,
+        })
+    }
+
+    fn with_source(source: Source) -> Self {
+        DeformableBuilder {
+            source,
+            cells: CellKind::Simplex,
+            model: ElementModel::EdgeRepulsion,
+            material: Material::default(),
+            stiffness: Stiffness::FromMaterial,
+            translation: Vector::ZERO,
+            rotation: Rotation::IDENTITY,
+            linvel: Vector::ZERO,
+            friction: 0.5,
+            restitution: 0.0,
+            friction_combine_rule: CoefficientCombineRule::Average,
+            restitution_combine_rule: CoefficientCombineRule::Average,
+            gravity_scale: 1.0,
+            groups: InteractionGroups::all(),
+            user_data: 0,
+        }
+    }
+
+    /// Cell kind of a [`DeformableBuilder::cuboid`] lattice (ignored for an explicit mesh).
+    pub fn cells(mut self, kind: CellKind) -> Self {
+        self.cells = kind;
+        self
+    }
+
+    /// The element model (default: [`ElementModel::EdgeRepulsion`]).
+    pub fn model(mut self, model: ElementModel) -> Self {
+        self.model = model;
+        self
+    }
+
+    /// The material (default: [`Material::default`]).
+    pub fn material(mut self, material: Material) -> Self {
+        self.material = material;
+        self
+    }
+
+    /// The stiffness form (default: from the material).
+    pub fn stiffness(mut self, stiffness: Stiffness) -> Self {
+        self.stiffness = stiffness;
+        self
+    }
+
+    /// Translation applied to the rest mesh.
+    pub fn translation(mut self, translation: Vector) -> Self {
+        self.translation = translation;
+        self
+    }
+
+    /// Rotation applied to the rest mesh (about the mesh origin, before the translation).
+    pub fn rotation(mut self, rotation: Rotation) -> Self {
+        self.rotation = rotation;
+        self
+    }
+
+    /// Initial velocity of every node.
+    pub fn linvel(mut self, linvel: Vector) -> Self {
+        self.linvel = linvel;
+        self
+    }
+
+    /// Friction coefficient against colliders (default 0.5), combined with the collider's.
+    pub fn friction(mut self, friction: Real) -> Self {
+        self.friction = friction;
+        self
+    }
+
+    /// Restitution coefficient against colliders (default 0), combined with the collider's.
+    pub fn restitution(mut self, restitution: Real) -> Self {
+        self.restitution = restitution;
+        self
+    }
+
+    /// Rule combining the friction coefficients (rapier's; default average).
+    pub fn friction_combine_rule(mut self, rule: CoefficientCombineRule) -> Self {
+        self.friction_combine_rule = rule;
+        self
+    }
+
+    /// Rule combining the restitution coefficients (rapier's; default average).
+    pub fn restitution_combine_rule(mut self, rule: CoefficientCombineRule) -> Self {
+        self.restitution_combine_rule = rule;
+        self
+    }
+
+    /// Multiplier of gravity for this body (default 1).
+    pub fn gravity_scale(mut self, scale: Real) -> Self {
+        self.gravity_scale = scale;
+        self
+    }
+
+    /// Which colliders this body may touch (rapier's collision groups).
+    pub fn collision_groups(mut self, groups: InteractionGroups) -> Self {
+        self.groups = groups;
+        self
+    }
+
+    /// Free user data.
+    pub fn user_data(mut self, data: u128) -> Self {
+        self.user_data = data;
+        self
+    }
+
+    /// Validates everything and builds the deformable.
+    pub fn build(self) -> Result<Deformable, BuildError> {
+        let mesh = match self.source {
+            Source::Mesh(m) => m,
+            Source::Cuboid {
+                half_extents,
+                resolution,
+            } => Mesh::cuboid(half_extents, resolution, self.cells)?,
+        };
+        let params = Resolved::new(self.material, self.stiffness)?;
+        let finite = |name, v: Vector| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(BuildError::InvalidParameter {
+                    name,
+                    value: (0..DIM)
+                        .map(|d| v[d])
+                        .find(|c| !c.is_finite())
+                        .unwrap_or(Real::NAN),
+                    expected: "finite components",
+                })
+            }
+        };
+        finite("translation", self.translation)?;
+        finite("linvel", self.linvel)?;
+        let range = |name, v: Real, lo: Real, hi: Real, expected| {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(BuildError::InvalidParameter {
+                    name,
+                    value: v,
+                    expected,
+                })
+            }
+        };
+        range(
+            "friction",
+            self.friction,
+            0.0,
+            Real::MAX,
+            "a non-negative finite coefficient",
+        )?;
+        range("restitution", self.restitution, 0.0, 1.0, "0 ≤ e ≤ 1")?;
+        range(
+            "gravity_scale",
+            self.gravity_scale,
+            -Real::MAX,
+            Real::MAX,
+            "a finite scale",
+        )?;
+        let rotation = self.rotation.normalize();
+        if !rotation.is_finite() {
+            return Err(BuildError::InvalidParameter {
+                name: "rotation",
+                value: Real::NAN,
+                expected: "a finite rotation",
+            });
+        }
+
+        let n = mesh.nodes().len();
+        let arity = mesh.kind().arity() as Real;
+        let mut masses = vec![0.0; n];
+        for (cell, ids) in mesh.cells().enumerate() {
+            let m = params.material.density * mesh.rest_volumes()[cell] / arity;
+            for &i in ids {
+                masses[i as usize] += m;
+            }
+        }
+        let inv_masses = masses.iter().map(|m| 1.0 / m).collect();
+        let state = ModelState::build(self.model, &mesh, &masses, &params, rotation)?;
+        let positions: Vec<Vector> = mesh
+            .nodes()
+            .iter()
+            .map(|p| rotation * *p + self.translation)
+            .collect();
+        let mut report = DeformableReport {
+            nodes: n,
+            elements: mesh.num_cells(),
+            min_volume_ratio: 1.0,
+            ..Default::default()
+        };
+        report.frozen = false;
+        Ok(Deformable {
+            state,
+            params,
+            model: self.model,
+            velocities: vec![self.linvel; n],
+            saved_positions: positions.clone(),
+            saved_velocities: vec![self.linvel; n],
+            scratch_velocities: vec![self.linvel; n],
+            positions,
+            masses,
+            inv_masses,
+            acc: Accumulator::new(n),
+            forces_valid: false,
+            limiter: Real::INFINITY,
+            contact: ContactMaterial {
+                friction: self.friction,
+                restitution: self.restitution,
+                friction_combine_rule: self.friction_combine_rule,
+                restitution_combine_rule: self.restitution_combine_rule,
+                groups: self.groups,
+            },
+            gravity_scale: self.gravity_scale,
+            frozen: false,
+            report,
+            mesh,
+            user_data: self.user_data,
+        })
+    }
+}

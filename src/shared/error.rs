@@ -1,0 +1,102 @@
+//! Typed errors for everything a user can feed in.
+
+use super::math::Real;
+
+/// Why a mesh, a material or a deformable could not be built.
+///
+/// Every variant names what was wrong and where (node, cell, parameter), so that the message
+/// alone is enough to find the bad datum in the user's input.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BuildError {
+    /// The mesh has no node or no cell.
+    #[error("empty mesh: {nodes} nodes and {cells} cells; a deformable needs at least one cell")]
+    EmptyMesh {
+        /// Number of nodes given.
+        nodes: usize,
+        /// Number of cells given.
+        cells: usize,
+    },
+    /// The flat cell index list is not a whole number of cells.
+    #[error("malformed cell list: {len} indices is not a multiple of {arity} (vertices per {kind} cell)")]
+    MalformedCells {
+        /// Length of the flat index list.
+        len: usize,
+        /// Vertices per cell.
+        arity: usize,
+        /// Cell kind name.
+        kind: &'static str,
+    },
+    /// A cell refers to a node that does not exist.
+    #[error("cell {cell} refers to node {index}, but the mesh has only {node_count} nodes")]
+    IndexOutOfRange {
+        /// The offending cell.
+        cell: usize,
+        /// The index found in it.
+        index: u32,
+        /// Number of nodes in the mesh.
+        node_count: usize,
+    },
+    /// A node coordinate is NaN or infinite.
+    #[error("node {node} has a non-finite coordinate {coordinates:?}")]
+    NonFiniteCoordinate {
+        /// The offending node.
+        node: usize,
+        /// Its coordinates.
+        coordinates: Vec<Real>,
+    },
+    /// A rest cell has (nearly) zero volume, or uses one node twice.
+    #[error("cell {cell} is degenerate at rest: signed volume {volume:e} (it must be positive and not vanishingly small)")]
+    DegenerateElement {
+        /// The offending cell.
+        cell: usize,
+        /// Its signed rest volume (area in 2D); for hexahedra/quads the smallest corner volume.
+        volume: Real,
+    },
+    /// A rest cell is inverted (negative orientation).
+    #[error("cell {cell} is inverted at rest: signed volume {volume:e}; reorder its vertices (positive orientation)")]
+    InvertedElement {
+        /// The offending cell.
+        cell: usize,
+        /// Its signed rest volume (area in 2D); for hexahedra/quads the smallest corner volume.
+        volume: Real,
+    },
+    /// A node belongs to no cell, so it would have no mass.
+    #[error("node {node} belongs to no cell (it would have no mass)")]
+    UnreferencedNode {
+        /// The offending node.
+        node: usize,
+    },
+    /// The density is zero, negative or not finite.
+    #[error("density must be positive and finite, got {density}")]
+    NonPositiveDensity {
+        /// The value given.
+        density: Real,
+    },
+    /// A stiffness (Young's modulus, raw `k` or `k/m`) is negative or not finite.
+    #[error("{what} must be non-negative and finite, got {value}")]
+    NegativeStiffness {
+        /// Which stiffness parameter.
+        what: &'static str,
+        /// The value given.
+        value: Real,
+    },
+    /// Another parameter is out of its range.
+    #[error("parameter `{name}` = {value} is out of range: expected {expected}")]
+    InvalidParameter {
+        /// Parameter name.
+        name: &'static str,
+        /// The value given.
+        value: Real,
+        /// The accepted range, in words.
+        expected: &'static str,
+    },
+    /// The element model cannot be built on this cell kind.
+    #[error("the {model} model needs simplex cells (triangles / tetrahedra), but the mesh has {kind} cells; build the lattice with CellKind::Simplex")]
+    UnsupportedCells {
+        /// Model name.
+        model: &'static str,
+        /// Cell kind name.
+        kind: &'static str,
+    },
+}

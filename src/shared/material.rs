@@ -1,0 +1,145 @@
+//! Materials as users think of them, and the raw stiffness forms of the papers.
+
+use super::error::BuildError;
+use super::math::Real;
+
+/// A material in the units a user thinks in (SI).
+///
+/// Each element model maps it to its own per-element stiffness `k` and damping `c`; the
+/// mapping is written in the model's documentation ([`super::model`]). In short: a term that
+/// stands for volume `V` over a rest length `L0` gets `k = s · E · V / L0²` with a per-model
+/// calibration constant `s`, and damping `c = 2 ζ √(k m)` with `m` the mass that term moves,
+/// so the damping ratio is the same for every element whatever the resolution.
+///
+/// The spring-like models cannot set Poisson's ratio independently of Young's modulus
+/// (lattice springs give a small effective ratio, about 0.02–0.13); `poisson_ratio` is kept for
+/// peers that can use it and for reports.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Mass density, kg/m³ (kg/m² in 2D). Must be positive.
+    pub density: Real,
+    /// Young's modulus, Pa. Must be non-negative.
+    pub young_modulus: Real,
+    /// Damping ratio of each element's own oscillation (0 = undamped, 1 = critical).
+    pub damping_ratio: Real,
+    /// Poisson's ratio (see the type's documentation).
+    pub poisson_ratio: Real,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            density: 1000.0,
+            young_modulus: 1.0e5,
+            damping_ratio: 0.05,
+            poisson_ratio: 0.3,
+        }
+    }
+}
+
+/// Where element stiffness comes from.
+#[derive(Copy, Clone, Debug, PartialEq, Default)]
+pub enum Stiffness {
+    /// From the [`Material`]'s Young's modulus and damping ratio (the default).
+    #[default]
+    FromMaterial,
+    /// The papers' raw form: every spring (Cooper & Maddock) or element vertex term
+    /// (shape-based, edge repulsion) gets stiffness `k` (N/m) and damping coefficient `c`
+    /// (N·s/m), whatever its size.
+    Raw {
+        /// Stiffness, N/m.
+        k: Real,
+        /// Damping coefficient, N·s/m.
+        c: Real,
+    },
+    /// The shape-based paper's `k/m` form: each term's stiffness is `k_over_m` times the mass
+    /// it moves (the reduced mass of a spring's two nodes; a cell's mass per vertex for a
+    /// vertex term), so `√(k_over_m)` is its angular frequency; damping by ratio.
+    PerMass {
+        /// Stiffness per unit mass, 1/s².
+        k_over_m: Real,
+        /// Damping ratio.
+        damping_ratio: Real,
+    },
+}
+
+/// Material and stiffness form, validated; resolves each element term's `k` and `c`.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Resolved {
+    pub material: Material,
+    pub stiffness: Stiffness,
+}
+
+impl Resolved {
+    pub fn new(material: Material, stiffness: Stiffness) -> Result<Self, BuildError> {
+        let m = material;
+        if !(m.density.is_finite() && m.density > 0.0) {
+            return Err(BuildError::NonPositiveDensity { density: m.density });
+        }
+        let negative = |what, value: Real| {
+            if value.is_finite() && value >= 0.0 {
+                Ok(())
+            } else {
+                Err(BuildError::NegativeStiffness { what, value })
+            }
+        };
+        negative("young_modulus", m.young_modulus)?;
+        let damping = |name, value: Real| {
+            if value.is_finite() && value >= 0.0 {
+                Ok(())
+            } else {
+                Err(BuildError::InvalidParameter {
+                    name,
+                    value,
+                    expected: "a non-negative finite damping",
+                })
+            }
+        };
+        damping("damping_ratio", m.damping_ratio)?;
+        if !(m.poisson_ratio.is_finite() && m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5) {
+            return Err(BuildError::InvalidParameter {
+                name: "poisson_ratio",
+                value: m.poisson_ratio,
+                expected: "-1 < ν < 0.5",
+            });
+        }
+        match stiffness {
+            Stiffness::FromMaterial => {}
+            Stiffness::Raw { k, c } => {
+                negative("raw stiffness k", k)?;
+                damping("raw damping c", c)?;
+            }
+            Stiffness::PerMass {
+                k_over_m,
+                damping_ratio,
+            } => {
+                negative("stiffness per mass k/m", k_over_m)?;
+                damping("damping_ratio", damping_ratio)?;
+            }
+        }
+        Ok(Resolved {
+            material,
+            stiffness,
+        })
+    }
+
+    /// `(k, c)` of one element term, given the material mapping's `k` for it and the mass it
+    /// moves.
+    #[inline]
+    pub fn k_c(&self, material_k: Real, mass: Real) -> (Real, Real) {
+        match self.stiffness {
+            Stiffness::FromMaterial => (
+                material_k,
+                2.0 * self.material.damping_ratio * (material_k * mass).sqrt(),
+            ),
+            Stiffness::Raw { k, c } => (k, c),
+            Stiffness::PerMass {
+                k_over_m,
+                damping_ratio,
+            } => {
+                let k = k_over_m * mass;
+                (k, 2.0 * damping_ratio * (k * mass).sqrt())
+            }
+        }
+    }
+}

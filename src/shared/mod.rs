@@ -1,0 +1,27 @@
+// Everything below is written once and compiled twice, by `dim2.rs` and `dim3.rs`. It reaches
+// the dimension only through `super::math` and `super::rapier`; a per-dimension difference is
+// a function or a constant in `math`, never a `cfg`.
+
+use super::{math, rapier};
+
+mod body;
+mod contact;
+mod error;
+mod material;
+pub mod mesh;
+pub mod model;
+mod pipeline;
+mod report;
+pub mod scenes;
+mod set;
+mod world;
+
+pub use body::{Deformable, DeformableBuilder};
+pub use error::BuildError;
+pub use material::{Material, Stiffness};
+pub use mesh::{CellKind, Mesh};
+pub use model::{ElementModel, RotationFit, ShapeDamping};
+pub use pipeline::{DeformablePipeline, PipelineSettings};
+pub use report::{DeformableReport, StepReport};
+pub use set::{DeformableHandle, DeformableSet};
+pub use world::DeformableWorld;

@@ -1,0 +1,231 @@
+//! Element force laws.
+//!
+//! Each model is a family of element terms, each a pure function of its nodes' positions and
+//! velocities (the `pub fn`s of each file), plus the loop that sums them into node forces.
+//! Every term applies its reaction to the nodes it couples, so a free body's linear momentum
+//! is conserved exactly and its angular momentum too (the shape-based element up to the
+//! convergence of its rotation fit; see [`RotationFit`]).
+//!
+//! While summing forces each loop also accumulates, per node, a Gershgorin bound on the
+//! stiffness and damping it feels (`Σ_j ‖K_ij‖`, `Σ_j ‖C_ij‖`). The pipeline turns these into
+//! the largest stable substep of symplectic Euler (`h < 2/ω`), recomputed every substep so that
+//! the edge-repulsion barrier, which stiffens as an element compresses, is always covered.
+
+pub mod centroid_springs;
+pub mod edge_repulsion;
+pub mod nonlinear_springs;
+pub mod shape_matching;
+pub mod springs;
+
+use super::error::BuildError;
+use super::material::Resolved;
+use super::math::{Real, Rotation, Vector};
+use super::mesh::{CellKind, Mesh};
+
+/// How the shape-based element finds its cell's rotation.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum RotationFit {
+    /// The paper's update (its eq. 11–16), `n ≥ 1` times per substep, warm-started from the
+    /// last substep's rotation. In 2D every `n` gives the exact angle (eq. 9).
+    Iterative(usize),
+    /// The rotation of the polar decomposition of `Σ r_i R0_iᵀ` (exact; the fixed point of the
+    /// iteration).
+    Polar,
+}
+
+/// Which velocity the shape-based element damps.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Default)]
+pub enum ShapeDamping {
+    /// Velocity relative to the cell's least-squares rigid motion (translation and spin):
+    /// damps deformation only, conserves angular momentum. The default.
+    #[default]
+    RigidMotion,
+    /// The paper's choice: velocity relative to the cell's centroid velocity. Also damps rigid
+    /// spin, so a spinning free body slows down.
+    Centroid,
+}
+
+/// The element model of a deformable.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum ElementModel {
+    /// Damped linear springs on every vertex pair of every cell (Cooper & Maddock eq. 1, 3).
+    Springs,
+    /// [`ElementModel::Springs`] plus a spring from each vertex to its cell's centroid
+    /// (Cooper & Maddock §4.1).
+    CentroidSprings,
+    /// Nonlinear springs `f = k(L0²/L − L)` on every vertex pair (Cooper & Maddock eq. 4).
+    NonlinearSprings,
+    /// The edge-repulsion (ER) element: edge springs plus a repulsion of each vertex from the
+    /// line (2D) / plane (3D) of its opposite facet (Cooper & Maddock eq. 5, §6). Simplex cells
+    /// only.
+    EdgeRepulsion,
+    /// The shape-based element: each cell pulled towards its rest shape rotated about its
+    /// centroid.
+    ShapeMatching {
+        /// How the rotation is found.
+        fit: RotationFit,
+        /// Which velocity is damped.
+        damping: ShapeDamping,
+    },
+}
+
+impl ElementModel {
+    /// The shape-based element with the paper's recommended 2 iterations and rigid-motion
+    /// damping.
+    pub const SHAPE_MATCHING: ElementModel = ElementModel::ShapeMatching {
+        fit: RotationFit::Iterative(2),
+        damping: ShapeDamping::RigidMotion,
+    };
+
+    /// All five models, the shape-based one with its defaults.
+    pub const ALL: [ElementModel; 5] = [
+        ElementModel::Springs,
+        ElementModel::CentroidSprings,
+        ElementModel::NonlinearSprings,
+        ElementModel::EdgeRepulsion,
+        ElementModel::SHAPE_MATCHING,
+    ];
+
+    /// A short kebab-case name ("springs", "edge-repulsion", ...).
+    pub fn name(&self) -> &'static str {
+        match self {
+            ElementModel::Springs => "springs",
+            ElementModel::CentroidSprings => "centroid-springs",
+            ElementModel::NonlinearSprings => "nonlinear-springs",
+            ElementModel::EdgeRepulsion => "edge-repulsion",
+            ElementModel::ShapeMatching { .. } => "shape-matching",
+        }
+    }
+}
+
+/// Per-node accumulators filled by the force loops.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Accumulator {
+    /// Force on each node.
+    pub force: Vec<Vector>,
+    /// Gershgorin bound on the stiffness row of each node, N/m.
+    pub stiffness: Vec<Real>,
+    /// Gershgorin bound on the damping row of each node, N·s/m.
+    pub damping: Vec<Real>,
+}
+
+impl Accumulator {
+    pub fn new(n: usize) -> Self {
+        Accumulator {
+            force: vec![Vector::ZERO; n],
+            stiffness: vec![0.0; n],
+            damping: vec![0.0; n],
+        }
+    }
+
+    pub fn clear(&mut self) {
+        self.force.fill(Vector::ZERO);
+        self.stiffness.fill(0.0);
+        self.damping.fill(0.0);
+    }
+}
+
+/// The built, model-specific element data (rest data and any per-cell state).
+#[derive(Clone, Debug)]
+pub(crate) enum ModelState {
+    Springs(springs::Springs),
+    CentroidSprings(centroid_springs::CentroidSprings),
+    NonlinearSprings(springs::Springs),
+    EdgeRepulsion(edge_repulsion::EdgeRepulsion),
+    ShapeMatching(shape_matching::ShapeMatching),
+}
+
+impl ModelState {
+    pub fn build(
+        model: ElementModel,
+        mesh: &Mesh,
+        masses: &[Real],
+        params: &Resolved,
+        initial_rotation: Rotation,
+    ) -> Result<Self, BuildError> {
+        Ok(match model {
+            ElementModel::Springs => ModelState::Springs(springs::Springs::build(
+                mesh,
+                masses,
+                params,
+                springs::MATERIAL_SCALE,
+                springs::Law::Linear,
+            )),
+            ElementModel::CentroidSprings => ModelState::CentroidSprings(
+                centroid_springs::CentroidSprings::build(mesh, masses, params),
+            ),
+            ElementModel::NonlinearSprings => {
+                ModelState::NonlinearSprings(springs::Springs::build(
+                    mesh,
+                    masses,
+                    params,
+                    nonlinear_springs::MATERIAL_SCALE,
+                    springs::Law::Nonlinear,
+                ))
+            }
+            ElementModel::EdgeRepulsion => {
+                if mesh.kind() != CellKind::Simplex {
+                    return Err(BuildError::UnsupportedCells {
+                        model: "edge-repulsion",
+                        kind: mesh.kind().name(),
+                    });
+                }
+                ModelState::EdgeRepulsion(edge_repulsion::EdgeRepulsion::build(
+                    mesh, masses, params,
+                ))
+            }
+            ElementModel::ShapeMatching { fit, damping } => {
+                if let RotationFit::Iterative(0) = fit {
+                    return Err(BuildError::InvalidParameter {
+                        name: "RotationFit::Iterative",
+                        value: 0.0,
+                        expected: "at least one iteration",
+                    });
+                }
+                ModelState::ShapeMatching(shape_matching::ShapeMatching::build(
+                    mesh,
+                    params,
+                    fit,
+                    damping,
+                    initial_rotation,
+                ))
+            }
+        })
+    }
+
+    /// Adds element forces at `(x, v)` into `acc`; returns the largest substep the model's
+    /// own limiter allows (infinite when it has none).
+    pub fn accumulate(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
+        match self {
+            ModelState::Springs(s) | ModelState::NonlinearSprings(s) => {
+                s.accumulate(x, v, acc);
+                Real::INFINITY
+            }
+            ModelState::CentroidSprings(s) => {
+                s.accumulate(x, v, acc);
+                Real::INFINITY
+            }
+            ModelState::EdgeRepulsion(s) => s.accumulate(x, v, acc),
+            ModelState::ShapeMatching(s) => {
+                s.accumulate(x, v, acc);
+                Real::INFINITY
+            }
+        }
+    }
+
+    /// Elastic (stored) energy at `x`.
+    pub fn elastic_energy(&self, x: &[Vector]) -> Real {
+        match self {
+            ModelState::Springs(s) | ModelState::NonlinearSprings(s) => s.elastic_energy(x),
+            ModelState::CentroidSprings(s) => s.elastic_energy(x),
+            ModelState::EdgeRepulsion(s) => s.elastic_energy(x),
+            ModelState::ShapeMatching(s) => s.elastic_energy(x),
+        }
+    }
+}
+
+/// Reduced mass of two nodes.
+#[inline]
+pub(crate) fn reduced_mass(a: Real, b: Real) -> Real {
+    a * b / (a + b)
+}

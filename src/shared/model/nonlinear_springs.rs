@@ -1,0 +1,62 @@
+//! Nonlinear springs that resist collapse (Cooper & Maddock 1999, eq. 4).
+//!
+//! ```text
+//! f(L) = k (L0 − L) + k L0²/L − k L0 = k (L0²/L − L)                   (eq. 4)
+//! ```
+//!
+//! is the magnitude pushing the two nodes apart: zero at rest, `→ +∞` as `L → 0`, and
+//! `−k (L − L0²/L)` when stretched. Its stiffness `−df/dL = k (1 + L0²/L²)` is `2k` at rest
+//! and grows without bound under compression; the pipeline's substep bound follows it.
+//! Damping is linear along the spring, as in eq. 1. Stored energy:
+//! `U(L) = k [ (L² − L0²)/2 − L0² ln(L/L0) ]`.
+//!
+//! Material mapping: as [`super::springs`] but with half the constant
+//! ([`MATERIAL_SCALE`]` = 2.9`), because the spring is `2k` stiff at rest.
+//!
+//! The force is kept finite at `L → 0` by evaluating the law at `max(L, 10⁻⁶ L0)`.
+
+use super::super::math::{Real, Vector};
+
+/// Calibration constant of the material mapping `k = s E V_s / L0²` (half the linear one).
+pub const MATERIAL_SCALE: Real = super::springs::MATERIAL_SCALE * 0.5;
+
+/// The magnitude of eq. 4, `k (L0²/L − L)`, positive when it pushes the nodes apart.
+#[inline]
+pub fn magnitude(length: Real, rest_length: Real, k: Real) -> Real {
+    let l = length.max(1e-6 * rest_length);
+    k * (rest_length * rest_length / l - l)
+}
+
+/// Stored energy `k [ (L² − L0²)/2 − L0² ln(L/L0) ]` (zero at rest).
+#[inline]
+pub fn energy(length: Real, rest_length: Real, k: Real) -> Real {
+    let l = length.max(1e-6 * rest_length);
+    k * (0.5 * (l * l - rest_length * rest_length)
+        - rest_length * rest_length * (l / rest_length).ln())
+}
+
+/// The force on node `i` of a damped nonlinear spring, and its current axial stiffness
+/// `k (1 + L0²/L²)`.
+#[inline]
+pub fn force(
+    xi: Vector,
+    xj: Vector,
+    vi: Vector,
+    vj: Vector,
+    rest_length: Real,
+    k: Real,
+    c: Real,
+) -> (Vector, Real) {
+    let d = xi - xj;
+    let l = d.length();
+    if l <= Real::MIN_POSITIVE {
+        return (Vector::ZERO, 2.0 * k);
+    }
+    let n = d / l;
+    let lc = l.max(1e-6 * rest_length);
+    let stiffness = k * (1.0 + rest_length * rest_length / (lc * lc));
+    (
+        n * (magnitude(l, rest_length, k) - c * (vi - vj).dot(n)),
+        stiffness,
+    )
+}

@@ -1,0 +1,126 @@
+//! Damped springs on every vertex pair of every cell (Cooper & Maddock 1999, eq. 1 and 3).
+//!
+//! For a spring between nodes `i` and `j` with rest length `L0`, current length
+//! `L = |x_i − x_j|` and unit direction `n = (x_i − x_j)/L`, the force on `i` is
+//!
+//! ```text
+//! f_i = [ k (L0 − L) − c (v_i − v_j)·n ] n,      f_j = −f_i          (eq. 1)
+//! ```
+//!
+//! Summed over the three edges of a triangle this is the "standard element" of eq. 3. Edges of
+//! triangles and tetrahedra are all their vertex pairs; for quads and hexahedra the face and
+//! body diagonals are springs too (a box of edge springs alone has no shear stiffness).
+//!
+//! Material mapping: a spring standing for volume `V_s` (each cell gives `V_cell / pairs` to
+//! each of its vertex pairs) gets `k = s · E · V_s / L0²` with `s =`
+//! [`MATERIAL_SCALE`]` = 5.8`, the factor a static compression test of a tetrahedral lattice
+//! needed to reproduce Young's modulus (see `DESIGN.md` §4, lesson 9), and `c = 2 ζ √(k μ)`
+//! with `μ` the reduced mass of the two nodes. The [`NonlinearSprings`] model shares this
+//! file's loop with the law of [`super::nonlinear_springs`].
+//!
+//! [`NonlinearSprings`]: super::ElementModel::NonlinearSprings
+
+use super::super::material::Resolved;
+use super::super::math::{Real, Vector};
+use super::super::mesh::Mesh;
+use super::{reduced_mass, Accumulator};
+
+/// Calibration constant `s` of the material mapping `k = s E V_s / L0²`.
+pub const MATERIAL_SCALE: Real = 5.8;
+
+/// The force on node `i` of a damped linear spring (eq. 1), and the stiffness it presents
+/// along its axis (`k`). Zero when the two nodes coincide (no direction).
+#[inline]
+pub fn linear_force(
+    xi: Vector,
+    xj: Vector,
+    vi: Vector,
+    vj: Vector,
+    rest_length: Real,
+    k: Real,
+    c: Real,
+) -> Vector {
+    let d = xi - xj;
+    let l = d.length();
+    if l <= Real::MIN_POSITIVE {
+        return Vector::ZERO;
+    }
+    let n = d / l;
+    n * (k * (rest_length - l) - c * (vi - vj).dot(n))
+}
+
+/// Which spring law a [`Springs`] set uses.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Law {
+    Linear,
+    Nonlinear,
+}
+
+/// A set of springs: flat arrays, one entry per spring.
+#[derive(Clone, Debug)]
+pub(crate) struct Springs {
+    pub pairs: Vec<[u32; 2]>,
+    pub rest: Vec<Real>,
+    pub k: Vec<Real>,
+    pub c: Vec<Real>,
+    pub law: Law,
+}
+
+impl Springs {
+    pub fn build(mesh: &Mesh, masses: &[Real], params: &Resolved, scale: Real, law: Law) -> Self {
+        let pairs = mesh.vertex_pairs();
+        let nodes = mesh.nodes();
+        let mut out = Springs {
+            pairs: Vec::with_capacity(pairs.len()),
+            rest: Vec::with_capacity(pairs.len()),
+            k: Vec::with_capacity(pairs.len()),
+            c: Vec::with_capacity(pairs.len()),
+            law,
+        };
+        for ([i, j], share) in pairs {
+            let l0 = nodes[i as usize].distance(nodes[j as usize]);
+            let material_k = scale * params.material.young_modulus * share / (l0 * l0);
+            let (k, c) = params.k_c(
+                material_k,
+                reduced_mass(masses[i as usize], masses[j as usize]),
+            );
+            out.pairs.push([i, j]);
+            out.rest.push(l0);
+            out.k.push(k);
+            out.c.push(c);
+        }
+        out
+    }
+
+    pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+        for s in 0..self.pairs.len() {
+            let [i, j] = self.pairs[s];
+            let (i, j) = (i as usize, j as usize);
+            let (l0, k, c) = (self.rest[s], self.k[s], self.c[s]);
+            let (f, k_eff) = match self.law {
+                Law::Linear => (linear_force(x[i], x[j], v[i], v[j], l0, k, c), k),
+                Law::Nonlinear => super::nonlinear_springs::force(x[i], x[j], v[i], v[j], l0, k, c),
+            };
+            acc.force[i] += f;
+            acc.force[j] -= f;
+            // Rank-one term with weights (1, −1): each row sums to 2k (2c).
+            acc.stiffness[i] += 2.0 * k_eff;
+            acc.stiffness[j] += 2.0 * k_eff;
+            acc.damping[i] += 2.0 * c;
+            acc.damping[j] += 2.0 * c;
+        }
+    }
+
+    pub fn elastic_energy(&self, x: &[Vector]) -> Real {
+        let mut e = 0.0;
+        for s in 0..self.pairs.len() {
+            let [i, j] = self.pairs[s];
+            let l = x[i as usize].distance(x[j as usize]);
+            e += match self.law {
+                Law::Linear => 0.5 * self.k[s] * (l - self.rest[s]).powi(2),
+                Law::Nonlinear => super::nonlinear_springs::energy(l, self.rest[s], self.k[s]),
+            };
+        }
+        e
+    }
+}

@@ -1,0 +1,78 @@
+//! What each step reports (`DESIGN.md` §5).
+
+use super::math::Real;
+use super::set::DeformableHandle;
+
+/// Diagnostics of one deformable over the last step.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DeformableReport {
+    /// Kinetic energy `Σ ½ m v²` at the end of the step, J.
+    pub kinetic_energy: Real,
+    /// Elastic energy stored in the elements at the end of the step, J.
+    pub elastic_energy: Real,
+    /// Gravitational potential energy `−Σ m g·x` (zero at the origin), J.
+    pub gravity_energy: Real,
+    /// Number of nodes.
+    pub nodes: usize,
+    /// Number of cells.
+    pub elements: usize,
+    /// Cells whose quality (volume ratio; smallest corner ratio for boxes) is ≤ 0 at the end of
+    /// the step: collapsed or inverted.
+    pub inverted_elements: usize,
+    /// Smallest cell quality (volume ratio `V/V0`) at the end of the step.
+    pub min_volume_ratio: Real,
+    /// Deepest node penetration into any collider at the end of the step, m.
+    pub max_penetration: Real,
+    /// Surface nodes that touched a collider during the step.
+    pub contacts: usize,
+    /// Substeps taken.
+    pub substeps: usize,
+    /// Substeps whose size the edge-repulsion crossing limiter chose (tighter than the
+    /// stability bound).
+    pub limiter_substeps: usize,
+    /// Whether the substep cap ([`PipelineSettings::max_substeps`]) was reached.
+    ///
+    /// [`PipelineSettings::max_substeps`]: super::PipelineSettings::max_substeps
+    pub substep_cap_hit: bool,
+    /// Whether the state turned non-finite during this step (the body was rolled back to the
+    /// start of the step and frozen).
+    pub non_finite: bool,
+    /// Whether the body is frozen (not simulated).
+    pub frozen: bool,
+    /// Wall time spent on element forces, s.
+    pub time_forces: f64,
+    /// Wall time spent on contacts (broad phase and node tests), s.
+    pub time_contacts: f64,
+    /// Wall time spent on integration and diagnostics, s.
+    pub time_integrate: f64,
+}
+
+/// Diagnostics of one pipeline step.
+#[derive(Clone, Debug, Default)]
+pub struct StepReport {
+    /// The step's duration, s.
+    pub dt: Real,
+    /// Per deformable, in set order.
+    pub deformables: Vec<(DeformableHandle, DeformableReport)>,
+    /// Wall time of the whole step, s.
+    pub wall_time: f64,
+}
+
+impl StepReport {
+    /// The report of one deformable, if it was stepped.
+    pub fn get(&self, handle: DeformableHandle) -> Option<&DeformableReport> {
+        self.deformables
+            .iter()
+            .find(|(h, _)| *h == handle)
+            .map(|(_, r)| r)
+    }
+
+    /// Largest substep count over all deformables.
+    pub fn max_substeps(&self) -> usize {
+        self.deformables
+            .iter()
+            .map(|(_, r)| r.substeps)
+            .max()
+            .unwrap_or(0)
+    }
+}

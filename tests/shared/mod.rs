@@ -1,0 +1,7 @@
+//! Tests written once for both dimensions: `crate::dim` is `sinew::dim2` or `sinew::dim3`.
+
+mod elements;
+mod errors;
+mod fall;
+mod pipeline;
+mod support;

@@ -1,0 +1,98 @@
+//! Pipeline behaviour: handles, substeps, containment of a blow-up.
+
+use crate::dim::math::{Vector, DIM, UP};
+use crate::dim::rapier::prelude::{
+    BroadPhaseBvh, ColliderSet, IntegrationParameters, RigidBodySet,
+};
+use crate::dim::{
+    DeformableBuilder, DeformablePipeline, DeformableSet, DeformableWorld, ElementModel, Material,
+    Stiffness,
+};
+
+fn jelly(young_modulus: f32) -> DeformableBuilder {
+    DeformableBuilder::cuboid(Vector::splat(0.5), [3; DIM]).material(Material {
+        density: 100.0,
+        young_modulus,
+        ..Default::default()
+    })
+}
+
+#[test]
+fn handles_are_generational() {
+    let mut set = DeformableSet::new();
+    let a = set.insert(jelly(1e4).build().unwrap());
+    assert!(set.remove(a).is_some());
+    let b = set.insert(jelly(1e4).build().unwrap());
+    assert!(
+        set.get(a).is_none(),
+        "a stale handle must not reach the new body"
+    );
+    assert!(set.get(b).is_some());
+    assert!(set.remove(a).is_none());
+    assert_eq!(set.len(), 1);
+}
+
+#[test]
+fn substeps_follow_the_stiffness() {
+    let run = |e: f32| {
+        let mut world = DeformableWorld::new();
+        world.set_dt(1.0 / 60.0);
+        let h = world.insert(jelly(e).translation(UP * 3.0).build().unwrap());
+        world.step();
+        world.report().get(h).unwrap().substeps
+    };
+    let (soft, stiff) = (run(1e4), run(1e6));
+    assert!(soft >= 1);
+    // ω ∝ √E: 100× the modulus needs about 10× the substeps.
+    assert!(
+        stiff as f32 > 5.0 * soft as f32,
+        "soft {soft}, stiff {stiff}"
+    );
+    assert!(
+        (stiff as f32) < 20.0 * soft as f32,
+        "soft {soft}, stiff {stiff}"
+    );
+}
+
+#[test]
+fn a_blow_up_is_contained_and_reported() {
+    // One forced substep per 16 ms step with a huge raw stiffness: symplectic Euler explodes.
+    let mut set = DeformableSet::new();
+    let bad = set.insert(
+        jelly(1e4)
+            .stiffness(Stiffness::Raw { k: 1e9, c: 0.0 })
+            .model(ElementModel::Springs)
+            .build()
+            .unwrap(),
+    );
+    let good = set.insert(jelly(1e4).translation(UP * 5.0).build().unwrap());
+    let mut wobble = set[bad].positions().to_vec();
+    wobble[0] += Vector::splat(0.05);
+    set[bad].set_positions(&wobble).unwrap();
+    let mut pipeline = DeformablePipeline::new();
+    pipeline.settings.fixed_substeps = Some(1);
+    let params = IntegrationParameters {
+        dt: 1.0 / 60.0,
+        ..Default::default()
+    };
+    let (mut bodies, colliders, bp) = (
+        RigidBodySet::new(),
+        ColliderSet::new(),
+        BroadPhaseBvh::new(),
+    );
+    let mut saw_non_finite = false;
+    for _ in 0..200 {
+        let r = pipeline.step(-UP * 9.81, &params, &mut set, &mut bodies, &colliders, &bp);
+        saw_non_finite |= r.get(bad).unwrap().non_finite;
+    }
+    assert!(saw_non_finite, "the explosion was not reported");
+    assert!(set[bad].is_frozen());
+    assert!(
+        set[bad].positions().iter().all(|p| p.is_finite()),
+        "frozen body keeps its last finite state"
+    );
+    let g = &set[good];
+    assert!(!g.is_frozen() && g.positions().iter().all(|p| p.is_finite()));
+    // The other body fell freely the whole time.
+    assert!(g.center_of_mass_velocity().dot(UP) < -9.81 * 3.0 * 0.9);
+}
