@@ -2,7 +2,7 @@
 //! element model, one line per run.
 //!
 //! ```text
-//! cargo run --release --example fall_and_bounce [-- --res 5 --seconds 3 --dt 0.001]
+//! cargo run --release --example fall_and_bounce [-- --res 5 --seconds 5 --dt 0.001]
 //! ```
 
 use std::env;
@@ -22,7 +22,7 @@ macro_rules! run_dimension {
         use sinew::$dim::ElementModel;
         let base = FallScene {
             resolution: arg("--res", 5),
-            seconds: arg("--seconds", 3.0),
+            seconds: arg("--seconds", 5.0),
             dt: arg("--dt", 1e-3),
             ..FallScene::default()
         };
@@ -50,7 +50,7 @@ macro_rules! run_dimension {
 }
 
 fn main() {
-    println!("fall and bounce: 1 m, 1 kg, E = 1e4 Pa, bottom dropped from 2 m (COM heights in m)");
+    println!("fall and bounce: 1 m, 1 kg, E = 1e4 Pa, damping ratio 0.1, bottom dropped from 2 m, 5 s (centre-of-mass heights in m)");
     run_dimension!(dim3, "3D");
     run_dimension!(dim2, "2D");
 }

@@ -46,3 +46,8 @@
 pub mod dim2;
 #[cfg(feature = "dim3")]
 pub mod dim3;
+
+// The README's example is compiled and run as a doctest.
+#[cfg(all(doctest, feature = "dim3"))]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

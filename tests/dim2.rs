@@ -6,5 +6,5 @@ pub use sinew::dim2 as dim;
 #[path = "shared/mod.rs"]
 mod shared;
 
-#[path = "cooper.rs"]
+#[path = "only2d/cooper.rs"]
 mod cooper;

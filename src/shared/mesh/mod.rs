@@ -117,7 +117,10 @@ impl Mesh {
             let volume = cell_volume(kind, &pts);
             let corners = corner_measures(kind, &pts);
             let worst = corners.iter().copied().fold(Real::INFINITY, Real::min);
-            if repeated || worst.abs() <= 1e-7 * scale || scale.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            if repeated
+                || worst.abs() <= 1e-7 * scale
+                || scale.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+            {
                 return Err(BuildError::DegenerateElement {
                     cell,
                     volume: worst,
