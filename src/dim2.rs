@@ -150,6 +150,22 @@ pub mod math {
 
     /// The "up" axis used for heights in reports and examples.
     pub const UP: Vector = Vector::Y;
+
+    /// Product of two angular quantities (scalars in 2D).
+    #[inline]
+    pub fn ang_dot(a: AngVector, b: AngVector) -> Real {
+        a * b
+    }
+
+    /// The vertices and edges of a convex polygon shape, in its local frame.
+    pub fn convex_outline(
+        shape: &dyn rapier2d::geometry::Shape,
+    ) -> Option<(Vec<Vector>, Vec<[usize; 2]>)> {
+        let poly = shape.as_convex_polygon()?;
+        let n = poly.points().len();
+        let edges = (0..n).map(|i| [i, (i + 1) % n]).collect();
+        Some((poly.points().to_vec(), edges))
+    }
 }
 
 #[path = "shared/mod.rs"]

@@ -206,6 +206,25 @@ pub mod math {
 
     /// The "up" axis used for heights in reports and examples.
     pub const UP: Vector = Vector::Y;
+
+    /// Dot product of two angular quantities.
+    #[inline]
+    pub fn ang_dot(a: AngVector, b: AngVector) -> Real {
+        a.dot(b)
+    }
+
+    /// The vertices and edges of a convex polyhedron shape, in its local frame.
+    pub fn convex_outline(
+        shape: &dyn rapier3d::geometry::Shape,
+    ) -> Option<(Vec<Vector>, Vec<[usize; 2]>)> {
+        let poly = shape.as_convex_polyhedron()?;
+        let edges = poly
+            .edges()
+            .iter()
+            .map(|e| [e.vertices[0] as usize, e.vertices[1] as usize])
+            .collect();
+        Some((poly.points().to_vec(), edges))
+    }
 }
 
 #[path = "shared/mod.rs"]

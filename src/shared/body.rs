@@ -36,6 +36,11 @@ pub struct Deformable {
     pub(crate) saved_positions: Vec<Vector>,
     pub(crate) saved_velocities: Vec<Vector>,
     pub(crate) scratch_velocities: Vec<Vector>,
+    pub(crate) attachments: Vec<super::attach::Attachment>,
+    /// Per node: index into `attachments`, or `u32::MAX`.
+    pub(crate) attachment_of: Vec<u32>,
+    /// Colliders touched during the last step, sorted.
+    pub(crate) touching: Vec<super::rapier::geometry::ColliderHandle>,
     /// Free for the user.
     pub user_data: u128,
 }
@@ -252,6 +257,7 @@ pub struct DeformableBuilder {
     restitution_combine_rule: CoefficientCombineRule,
     gravity_scale: Real,
     groups: InteractionGroups,
+    ignore_attached_bodies: bool,
     user_data: u128,
 }
 
@@ -286,6 +292,7 @@ impl DeformableBuilder {
             restitution_combine_rule: CoefficientCombineRule::Average,
             gravity_scale: 1.0,
             groups: InteractionGroups::all(),
+            ignore_attached_bodies: true,
             user_data: 0,
         }
     }
@@ -365,6 +372,13 @@ impl DeformableBuilder {
     /// Which colliders this body may touch (rapier's collision groups).
     pub fn collision_groups(mut self, groups: InteractionGroups) -> Self {
         self.groups = groups;
+        self
+    }
+
+    /// Whether contacts ignore the colliders of the bodies this deformable is bound to
+    /// (default `true`: tissue skinned onto a bone overlaps it by construction).
+    pub fn ignore_attached_bodies(mut self, ignore: bool) -> Self {
+        self.ignore_attached_bodies = ignore;
         self
     }
 
@@ -466,6 +480,9 @@ impl DeformableBuilder {
             saved_positions: positions.clone(),
             saved_velocities: vec![self.linvel; n],
             scratch_velocities: vec![self.linvel; n],
+            attachments: Vec::new(),
+            attachment_of: vec![u32::MAX; n],
+            touching: Vec::new(),
             positions,
             masses,
             inv_masses,
@@ -478,6 +495,7 @@ impl DeformableBuilder {
                 friction_combine_rule: self.friction_combine_rule,
                 restitution_combine_rule: self.restitution_combine_rule,
                 groups: self.groups,
+                ignore_attached_bodies: self.ignore_attached_bodies,
             },
             gravity_scale: self.gravity_scale,
             frozen: false,

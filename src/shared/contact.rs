@@ -1,32 +1,55 @@
-//! Node-versus-collider contact (shape-based paper §2.3; `DESIGN.md` §4).
+//! Contact between deformables and rapier colliders (shape-based paper §2.3; `DESIGN.md` §4).
 //!
-//! Each step a deformable asks rapier's broad phase (its BVH, through a short-lived query
-//! pipeline) for the colliders whose boxes overlap the box swept by its surface nodes. Each
-//! substep, after the element forces have updated the velocities and before positions move
-//! (`x += h v`), every surface node is tested against those candidates with parry:
+//! **Candidates.** Each step, every surface node asks rapier's broad phase (its BVH, through a
+//! short-lived query pipeline) for the colliders whose boxes overlap the box the node sweeps
+//! during the step, widened by how far the nearby moving bodies travel. Sensors are skipped,
+//! the deformable's collision groups are honoured, and the bodies it is bound to are ignored
+//! unless it asks otherwise.
 //!
-//! * a node already inside a collider is put back on its closest surface point (parry's
-//!   point projection onto the true closest feature, never an infinite plane);
+//! **Moving colliders.** A collider's pose at any time of the step comes from its body: fixed
+//! bodies stay put; kinematic bodies are interpolated from `position()` to `next_position()`
+//! (position-based) or predicted from their velocity (velocity-based); dynamic bodies are
+//! predicted from their current velocity, which the deformable's impulses change during the
+//! step. The point velocity of a contact is that of the collider's motion.
+//!
+//! **Node against collider**, each substep, after element forces and before `x += h v`, for
+//! every free surface node, against its candidates at their end-of-substep poses:
+//! * a node found inside a collider is put back on its surface where it came in (a ray cast
+//!   back along its motion relative to the collider, so a thin plate is not crossed by
+//!   projecting to its far side), or on the closest surface point (parry's projection onto the
+//!   true closest feature) when it has no relative motion;
 //! * otherwise the segment it is about to sweep, `x → x + h v`, is ray-cast against the
-//!   collider, so no speed can carry it through a thin collider.
+//!   collider, so no speed carries it through a thin collider.
 //!
-//! On contact the normal velocity relative to the collider's point velocity is set to
-//! `−e · (approach speed before this substep's force update)` if that approach was faster than
-//! the restitution threshold (a bounce), else to just close the gap (a resting contact); the
-//! tangential velocity loses `μ · Δv_n` (Coulomb; it sticks when that is enough). `e` and `μ`
-//! combine the deformable's and the collider's coefficients with rapier's rules. The momentum
-//! the node gains is taken from a dynamic parent body as an impulse at the contact point.
+//! The normal velocity relative to the collider becomes `−e · (approach speed before this
+//! substep's force update)` when that approach is faster than the restitution threshold (a
+//! bounce), else just what closes the gap (resting contact); the tangential velocity loses
+//! `μ Δv_n` (Coulomb; it sticks when that is enough). `e` and `μ` combine the deformable's and
+//! the collider's coefficients with rapier's rules. The momentum the node gains is taken from a
+//! dynamic body, at once, as an impulse at the contact point.
+//!
+//! **Rigid features against soft faces.** A rigid corner or thin edge can reach between the
+//! nodes of a coarse mesh without touching any of them. So each substep the vertices of
+//! cuboids and convex polytopes, points sampled along their edges (spacing half the shortest
+//! surface edge), and the deepest points of balls and capsules are tested against the
+//! deformable's surface facets (triangles in 3D, segments in 2D): a feature behind a facet,
+//! within the facet's prism and less than a facet size deep, moves the facet's nodes (mass- and
+//! barycentric-weighted velocity change) so the facet ends the substep on the feature, and the
+//! opposite impulse goes to a dynamic body. Not covered: features of trimeshes, heightfields,
+//! compound and other shapes (their surfaces still stop nodes), and friction on facet contacts.
 
-use super::math::{Real, Vector};
-use super::rapier::dynamics::{CoefficientCombineRule, RigidBodyHandle, RigidBodySet};
-use super::rapier::geometry::BroadPhaseBvh;
+use super::math::{self, Pose, Real, Vector, DIM, FACET_ARITY};
+use super::rapier::dynamics::{
+    CoefficientCombineRule, RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType,
+};
 use super::rapier::geometry::{
-    Aabb, BoundingVolume, Collider, ColliderHandle, ColliderSet, InteractionGroups, Ray,
+    Aabb, BoundingVolume, BroadPhaseBvh, Collider, ColliderHandle, ColliderSet, InteractionGroups,
+    Ray,
 };
 use super::rapier::parry::query::DefaultQueryDispatcher;
 use super::rapier::pipeline::QueryFilter;
 
-/// Contact coefficients of a deformable.
+/// Contact coefficients and filters of a deformable.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub(crate) struct ContactMaterial {
     pub friction: Real,
@@ -34,87 +57,366 @@ pub(crate) struct ContactMaterial {
     pub friction_combine_rule: CoefficientCombineRule,
     pub restitution_combine_rule: CoefficientCombineRule,
     pub groups: InteractionGroups,
+    pub ignore_attached_bodies: bool,
+}
+
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) enum MotionKind {
+    Fixed,
+    Kinematic,
+    Dynamic,
+}
+
+/// How a rigid body moves over the step.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct BodyMotion {
+    pub handle: RigidBodyHandle,
+    pub kind: MotionKind,
+    pub pose0: Pose,
+    pub pose1: Pose,
+}
+
+impl BodyMotion {
+    pub fn new(handle: RigidBodyHandle, body: &RigidBody, dt: Real) -> Self {
+        let pose0 = *body.position();
+        let (kind, pose1) = match body.body_type() {
+            RigidBodyType::Fixed => (MotionKind::Fixed, pose0),
+            RigidBodyType::KinematicPositionBased => (MotionKind::Kinematic, *body.next_position()),
+            RigidBodyType::KinematicVelocityBased => (
+                MotionKind::Kinematic,
+                body.predict_position_using_velocity(dt),
+            ),
+            // Dynamic bodies, and rapier's own soft-body proxies, which count as dynamic.
+            _ => (
+                MotionKind::Dynamic,
+                body.predict_position_using_velocity(dt),
+            ),
+        };
+        BodyMotion {
+            handle,
+            kind,
+            pose0,
+            pose1,
+        }
+    }
+
+    /// The body's pose at fraction `s` of the step.
+    pub fn pose_at(&self, s: Real, dt: Real, bodies: &RigidBodySet) -> Pose {
+        match self.kind {
+            MotionKind::Fixed => self.pose0,
+            MotionKind::Kinematic => self.pose0.lerp(&self.pose1, s),
+            MotionKind::Dynamic => bodies
+                .get(self.handle)
+                .map_or(self.pose0, |b| b.predict_position_using_velocity(s * dt)),
+        }
+    }
+
+    /// Velocity of the material point at world position `p` (at fraction `s` of the step).
+    pub fn point_velocity(
+        &self,
+        p: Vector,
+        pose_s: &Pose,
+        dt: Real,
+        bodies: &RigidBodySet,
+    ) -> Vector {
+        match self.kind {
+            MotionKind::Fixed => Vector::ZERO,
+            MotionKind::Kinematic => {
+                let local = pose_s.inverse_transform_point(p);
+                (self.pose1.transform_point(local) - self.pose0.transform_point(local)) / dt
+            }
+            MotionKind::Dynamic => bodies
+                .get(self.handle)
+                .map_or(Vector::ZERO, |b| b.velocity_at_point(p)),
+        }
+    }
+
+    /// An upper bound of how far any point within `radius` of the body origin travels.
+    pub fn travel(&self, radius: Real) -> Real {
+        let t = (self.pose1.translation - self.pose0.translation).length();
+        let a = math::rotation_angle_between(self.pose0.rotation, self.pose1.rotation);
+        t + a * radius
+    }
+}
+
+/// A point feature of a rigid collider for the facet test: a point in the collider's frame and
+/// a radius (zero for polytope corners and edge samples).
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Feature {
+    pub local: Vector,
+    pub radius: Real,
 }
 
 /// A collider a deformable may touch this step.
 pub(crate) struct Candidate<'a> {
-    #[allow(dead_code)] // kept for contact events (next issue)
     pub handle: ColliderHandle,
     pub collider: &'a Collider,
-    pub aabb: Aabb,
-    pub body: Option<RigidBodyHandle>,
-    pub moving: bool,
+    /// Index into the step's body motions.
+    pub motion: Option<usize>,
+    /// Pose relative to the parent body (or absolute, without one).
+    pub local_pose: Pose,
+    /// Box swept over the step.
+    pub swept: Aabb,
     pub dynamic: bool,
     pub friction: Real,
     pub restitution: Real,
+    pub features: Vec<Feature>,
+    /// Pose at the end of the current substep.
+    pub pose: Pose,
 }
 
-/// Gathers the colliders whose broad-phase boxes overlap `region`.
-pub(crate) fn gather<'a>(
-    region: Aabb,
-    dt: Real,
+impl Candidate<'_> {
+    pub fn pose_at(
+        &self,
+        s: Real,
+        dt: Real,
+        motions: &[BodyMotion],
+        bodies: &RigidBodySet,
+    ) -> Pose {
+        match self.motion {
+            Some(m) => motions[m].pose_at(s, dt, bodies) * self.local_pose,
+            None => self.local_pose,
+        }
+    }
+
+    pub fn point_velocity(
+        &self,
+        p: Vector,
+        s: Real,
+        dt: Real,
+        motions: &[BodyMotion],
+        bodies: &RigidBodySet,
+    ) -> Vector {
+        match self.motion {
+            Some(m) => {
+                let body_pose = motions[m].pose_at(s, dt, bodies);
+                motions[m].point_velocity(p, &body_pose, dt, bodies)
+            }
+            None => Vector::ZERO,
+        }
+    }
+
+    pub fn body(&self, motions: &[BodyMotion]) -> Option<RigidBodyHandle> {
+        self.motion.map(|m| motions[m].handle)
+    }
+}
+
+/// Builds a candidate for a collider near the deformable (`region`, world frame), with its
+/// point features sampled at `spacing`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn candidate<'a>(
+    handle: ColliderHandle,
+    collider: &'a Collider,
+    motion: Option<usize>,
+    motions: &[BodyMotion],
     material: &ContactMaterial,
+    region: &Aabb,
+    spacing: Real,
+) -> Candidate<'a> {
+    let local_pose = match (motion, collider.position_wrt_parent()) {
+        (Some(_), Some(p)) => *p,
+        (Some(m), None) => motions[m].pose0.inverse() * *collider.position(),
+        (None, _) => *collider.position(),
+    };
+    let (pose0, pose1) = match motion {
+        Some(m) => (motions[m].pose0 * local_pose, motions[m].pose1 * local_pose),
+        None => (local_pose, local_pose),
+    };
+    let shape = collider.shape();
+    let swept = shape
+        .compute_aabb(&pose0)
+        .merged(&shape.compute_aabb(&pose1))
+        .loosened(1e-4);
+    let friction = CoefficientCombineRule::combine(
+        material.friction,
+        collider.friction(),
+        material.friction_combine_rule,
+        collider.friction_combine_rule(),
+    );
+    let restitution = CoefficientCombineRule::combine(
+        material.restitution,
+        collider.restitution(),
+        material.restitution_combine_rule,
+        collider.restitution_combine_rule(),
+    );
+    let features = features(collider, &pose0, &pose1, region, spacing);
+    Candidate {
+        handle,
+        collider,
+        motion,
+        local_pose,
+        swept,
+        dynamic: motion.is_some_and(|m| motions[m].kind == MotionKind::Dynamic),
+        friction,
+        restitution,
+        features,
+        pose: pose0,
+    }
+}
+
+/// Point features of a collider that can reach `region` during the step.
+fn features(
+    collider: &Collider,
+    pose0: &Pose,
+    pose1: &Pose,
+    region: &Aabb,
+    spacing: Real,
+) -> Vec<Feature> {
+    let shape = collider.shape();
+    let mut out = Vec::new();
+    let near = |p: Vector| {
+        region.contains_local_point(pose0.transform_point(p))
+            || region.contains_local_point(pose1.transform_point(p))
+    };
+    let polytope =
+        |points: &[Vector], edges: &[[usize; 2]], radius: Real, out: &mut Vec<Feature>| {
+            for &p in points {
+                if near(p) {
+                    out.push(Feature { local: p, radius });
+                }
+            }
+            // Edges are features in 3D only: in 2D a polygon's edges are its faces, which the
+            // node test already covers.
+            for &[a, b] in edges.iter().filter(|_| DIM == 3) {
+                let (pa, pb) = (points[a], points[b]);
+                // Clip the edge (in the world, at both poses) to the region, then sample it.
+                let mut range: Option<(Real, Real)> = None;
+                for pose in [pose0, pose1] {
+                    let (wa, wb) = (pose.transform_point(pa), pose.transform_point(pb));
+                    let len = (wb - wa).length();
+                    if len <= Real::EPSILON {
+                        continue;
+                    }
+                    if let Some((t0, t1)) = region.clip_line_parameters(wa, (wb - wa) / len) {
+                        let (t0, t1) = ((t0 / len).max(0.0), (t1 / len).min(1.0));
+                        if t0 <= t1 {
+                            range =
+                                Some(range.map_or((t0, t1), |(r0, r1)| (r0.min(t0), r1.max(t1))));
+                        }
+                    }
+                }
+                let Some((t0, t1)) = range else { continue };
+                let length = (pb - pa).length() * (t1 - t0);
+                let n = ((length / spacing).ceil() as usize).clamp(1, 256);
+                for k in 0..=n {
+                    let t = t0 + (t1 - t0) * k as Real / n as Real;
+                    if t > 0.0 && t < 1.0 {
+                        out.push(Feature {
+                            local: pa + (pb - pa) * t,
+                            radius,
+                        });
+                    }
+                }
+            }
+        };
+    if let Some(c) = shape.as_cuboid() {
+        let corners: Vec<Vector> = (0..1usize << DIM)
+            .map(|bits| {
+                let mut p = c.half_extents;
+                for d in 0..DIM {
+                    if bits & (1 << d) != 0 {
+                        p[d] = -p[d];
+                    }
+                }
+                p
+            })
+            .collect();
+        let mut edges = Vec::new();
+        for a in 0..corners.len() {
+            for d in 0..DIM {
+                let b = a ^ (1 << d);
+                if a < b {
+                    edges.push([a, b]);
+                }
+            }
+        }
+        polytope(&corners, &edges, 0.0, &mut out);
+    } else if let Some((points, edges)) = math::convex_outline(shape) {
+        polytope(&points, &edges, 0.0, &mut out);
+    } else if let Some(ball) = shape.as_ball() {
+        out.push(Feature {
+            local: Vector::ZERO,
+            radius: ball.radius,
+        });
+    } else if let Some(cap) = shape.as_capsule() {
+        // The axis is sampled in both dimensions: each sample stands for a ball.
+        let len = cap.segment.length();
+        let k = ((len / spacing).ceil() as usize).clamp(1, 256);
+        for j in 0..=k {
+            let p = cap.segment.a + (cap.segment.b - cap.segment.a) * (j as Real / k as Real);
+            if near(p) || j == 0 || j == k {
+                out.push(Feature {
+                    local: p,
+                    radius: cap.radius,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Collects the colliders that the broad phase reports near `region` (one BVH query per
+/// deformable), skipping sensors, filtered groups and (optionally) bound bodies.
+pub(crate) fn near_colliders(
+    region: Aabb,
+    material: &ContactMaterial,
+    attached_bodies: &[RigidBodyHandle],
     bodies: &RigidBodySet,
-    colliders: &'a ColliderSet,
+    colliders: &ColliderSet,
     broad_phase: &BroadPhaseBvh,
-    out: &mut Vec<Candidate<'a>>,
+    out: &mut Vec<ColliderHandle>,
 ) {
     out.clear();
     let filter = QueryFilter::default()
         .exclude_sensors()
         .groups(material.groups);
     let qp = broad_phase.as_query_pipeline(&DefaultQueryDispatcher, bodies, colliders, filter);
-    for (handle, _) in qp.intersect_aabb_conservative(region) {
-        // Borrow from the set itself so the reference outlives the query pipeline.
-        let Some(collider) = colliders.get(handle) else {
+    for (handle, co) in qp.intersect_aabb_conservative(region) {
+        if material.ignore_attached_bodies
+            && co.parent().is_some_and(|p| attached_bodies.contains(&p))
+        {
             continue;
-        };
-        let parent = collider
-            .parent()
-            .and_then(|h| bodies.get(h).map(|b| (h, b)));
-        let (moving, dynamic, sweep) = match parent {
-            Some((_, b)) if !b.is_fixed() => {
-                let speed = b.linvel().length()
-                    + super::math::ang_norm(b.angvel())
-                        * collider.compute_aabb().half_extents().length();
-                (true, b.is_dynamic(), speed * dt)
+        }
+        out.push(handle);
+    }
+    out.sort_unstable_by_key(|h| h.into_raw_parts());
+}
+
+/// Per-node broad phase: the candidates whose BVH boxes overlap `node_box`, as indices into
+/// `candidates`, appended to `out`.
+pub(crate) fn node_candidates(
+    node_box: Aabb,
+    material: &ContactMaterial,
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    broad_phase: &BroadPhaseBvh,
+    candidates: &[Candidate<'_>],
+    out: &mut Vec<u32>,
+) {
+    let filter = QueryFilter::default()
+        .exclude_sensors()
+        .groups(material.groups);
+    let qp = broad_phase.as_query_pipeline(&DefaultQueryDispatcher, bodies, colliders, filter);
+    for (handle, _) in qp.intersect_aabb_conservative(node_box) {
+        if let Ok(k) =
+            candidates.binary_search_by_key(&handle.into_raw_parts(), |c| c.handle.into_raw_parts())
+        {
+            if candidates[k].swept.intersects(&node_box) {
+                out.push(k as u32);
             }
-            _ => (false, false, 0.0),
-        };
-        let friction = CoefficientCombineRule::combine(
-            material.friction,
-            collider.friction(),
-            material.friction_combine_rule,
-            collider.friction_combine_rule(),
-        );
-        let restitution = CoefficientCombineRule::combine(
-            material.restitution,
-            collider.restitution(),
-            material.restitution_combine_rule,
-            collider.restitution_combine_rule(),
-        );
-        out.push(Candidate {
-            handle,
-            collider,
-            aabb: collider.compute_aabb().loosened(sweep + 1e-4),
-            body: parent.map(|(h, _)| h),
-            moving,
-            dynamic,
-            friction,
-            restitution,
-        });
+        }
     }
 }
 
 /// What a node's contact did this substep.
 pub(crate) struct NodeContact {
-    pub body: Option<RigidBodyHandle>,
-    pub dynamic: bool,
+    pub candidate: usize,
     pub point: Vector,
     pub impulse: Vector,
 }
 
-/// Resolves one node against the candidates: may move `x` back to the surface and change `v`.
+/// Resolves one free node against its candidates (at their end-of-substep poses): may move `x`
+/// back to a surface and change `v`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn resolve_node(
     x: &mut Vector,
@@ -122,33 +424,63 @@ pub(crate) fn resolve_node(
     v_before: Vector,
     mass: Real,
     h: Real,
+    s1: Real,
+    dt: Real,
     restitution_threshold: Real,
+    candidate_ids: &[u32],
     candidates: &[Candidate<'_>],
+    motions: &[BodyMotion],
     bodies: &RigidBodySet,
 ) -> Option<NodeContact> {
     let start = *x;
     let motion = *v * h;
     let end = start + motion;
     let seg = Aabb::new(start.min(end), start.max(end)).loosened(1e-6);
-    // (time of impact, normal, point on the surface, candidate, inside)
+    // (time of impact, outward normal, surface point, candidate, inside)
     let mut best: Option<(Real, Vector, Vector, usize, bool)> = None;
-    for (ci, cand) in candidates.iter().enumerate() {
-        if !cand.aabb.intersects(&seg) {
+    for &ci in candidate_ids {
+        let ci = ci as usize;
+        let cand = &candidates[ci];
+        let shape = cand.collider.shape();
+        let pose = &cand.pose;
+        if !shape.compute_aabb(pose).loosened(1e-4).intersects(&seg) {
             continue;
         }
-        let shape = cand.collider.shape();
-        let pose = cand.collider.position();
         if shape.contains_point(pose, start) {
+            // Where did it come in? Back along its motion relative to the collider, no further
+            // than it moved in a substep (plus the depth), so a node deep in a thin plate goes
+            // back out the side it entered, and a node sliding along a face is not sent to a
+            // far edge.
             let proj = shape.project_point(pose, start, false);
-            let out = proj.point - start;
-            let depth = out.length();
-            let normal = if depth > Real::EPSILON {
-                out / depth
-            } else {
-                continue;
+            let depth = (proj.point - start).length();
+            let rel = v_before - cand.point_velocity(start, s1, dt, motions, bodies);
+            let mut entry = None;
+            if rel.length_squared() > 1e-12 {
+                let back = Ray::new(start, -rel.normalize());
+                let reach = rel.length() * h + 2.0 * depth + 1e-6;
+                if let Some(hit) = shape.cast_ray_and_get_normal(pose, &back, reach, false) {
+                    // Leaving the shape: the outward normal points along the ray.
+                    let normal = if hit.normal.dot(back.dir) < 0.0 {
+                        -hit.normal
+                    } else {
+                        hit.normal
+                    };
+                    entry = Some((back.point_at(hit.time_of_impact), normal));
+                }
+            }
+            let (point, normal) = match entry {
+                Some((p, n)) if n.length_squared() > 0.5 => (p, n),
+                _ => {
+                    let out = proj.point - start;
+                    if depth <= Real::EPSILON {
+                        continue;
+                    }
+                    (proj.point, out / depth)
+                }
             };
+            let depth = (point - start).length();
             if best.is_none_or(|b| !b.4 || depth > (b.2 - start).length()) {
-                best = Some((0.0, normal, proj.point, ci, true));
+                best = Some((0.0, normal, point, ci, true));
             }
         } else if motion.length_squared() > 0.0 {
             let ray = Ray::new(start, motion);
@@ -167,12 +499,7 @@ pub(crate) fn resolve_node(
     }
     let (_, n, point, ci, inside) = best?;
     let cand = &candidates[ci];
-    let vc = match cand.body {
-        Some(b) if cand.moving => bodies
-            .get(b)
-            .map_or(Vector::ZERO, |b| b.velocity_at_point(point)),
-        _ => Vector::ZERO,
-    };
+    let vc = cand.point_velocity(point, s1, dt, motions, bodies);
     let vr = *v - vc;
     let vn = vr.dot(n);
     let gap = if inside {
@@ -188,7 +515,7 @@ pub(crate) fn resolve_node(
     if vn < vn_min {
         let approach = (v_before - vc).dot(n);
         let vn_new = if -approach > restitution_threshold && cand.restitution > 0.0 {
-            -cand.restitution * approach
+            (-cand.restitution * approach).max(vn_min)
         } else {
             vn_min
         };
@@ -203,23 +530,88 @@ pub(crate) fn resolve_node(
         *v = vc + n * vn_new + vt_new;
     }
     Some(NodeContact {
-        body: cand.body,
-        dynamic: cand.dynamic,
+        candidate: ci,
         point,
-        impulse: (v_old - *v) * mass,
+        impulse: (*v - v_old) * mass,
     })
 }
 
-/// Depth of `x` inside the deepest candidate (zero when outside all).
-pub(crate) fn penetration(x: Vector, candidates: &[Candidate<'_>]) -> Real {
-    let mut deepest: Real = 0.0;
-    for cand in candidates {
-        if !cand.aabb.contains_local_point(x) {
-            continue;
+/// One facet contact: velocity changes for the facet's nodes and the impulse the facet took.
+pub(crate) struct FacetContact {
+    pub candidate: usize,
+    pub point: Vector,
+    /// Barycentric weights of the contact point.
+    pub weights: [Real; FACET_ARITY],
+    /// Impulse per unit inverse-mass-weight: node `j` gains `w_j / m_j · lambda · n` of
+    /// velocity.
+    pub lambda: Real,
+    pub normal: Vector,
+}
+
+/// Tests the features of the facet's candidates against the facet at predicted positions `y`
+/// (outward oriented); returns the deepest violation.
+pub(crate) fn resolve_facet(
+    y: &[Vector; FACET_ARITY],
+    inv_masses: &[Real; FACET_ARITY],
+    candidate_ids: &[u32],
+    candidates: &[Candidate<'_>],
+) -> Option<FacetContact> {
+    let normal = math::facet_normal(y);
+    let len = normal.length();
+    if len <= Real::MIN_POSITIVE {
+        return None;
+    }
+    let n = normal / len;
+    let mut size: Real = 0.0;
+    for a in 0..FACET_ARITY {
+        for b in a + 1..FACET_ARITY {
+            size = size.max(y[a].distance(y[b]));
         }
+    }
+    let denom_of = |w: &[Real; FACET_ARITY]| -> Real {
+        w.iter().zip(inv_masses).map(|(w, im)| w * w * im).sum()
+    };
+    let mut best: Option<(Real, FacetContact)> = None;
+    for &ci in candidate_ids {
+        let cand = &candidates[ci as usize];
+        for f in &cand.features {
+            let p = cand.pose.transform_point(f.local) - n * f.radius;
+            let d = n.dot(p - y[0]);
+            if d >= 0.0 || d < -size {
+                continue;
+            }
+            let w = math::facet_barycentric(y, p);
+            if w.iter().any(|&wj| wj < -1e-3) {
+                continue;
+            }
+            let denom = denom_of(&w);
+            if denom <= 0.0 {
+                continue;
+            }
+            if best.as_ref().is_none_or(|(bd, _)| d < *bd) {
+                best = Some((
+                    d,
+                    FacetContact {
+                        candidate: ci as usize,
+                        point: p,
+                        weights: w,
+                        lambda: d / denom,
+                        normal: n,
+                    },
+                ));
+            }
+        }
+    }
+    best.map(|(_, c)| c)
+}
+
+/// Depth of `x` inside the deepest of the given candidates (zero when outside all).
+pub(crate) fn penetration(x: Vector, candidate_ids: &[u32], candidates: &[Candidate<'_>]) -> Real {
+    let mut deepest: Real = 0.0;
+    for &ci in candidate_ids {
+        let cand = &candidates[ci as usize];
         let shape = cand.collider.shape();
-        let pose = cand.collider.position();
-        let proj = shape.project_point(pose, x, false);
+        let proj = shape.project_point(&cand.pose, x, false);
         if proj.is_inside {
             deepest = deepest.max((proj.point - x).length());
         }

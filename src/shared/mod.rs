@@ -4,9 +4,11 @@
 
 use super::{math, rapier};
 
+mod attach;
 mod body;
 mod contact;
 mod error;
+mod events;
 mod material;
 pub mod mesh;
 pub mod model;
@@ -16,8 +18,10 @@ pub mod scenes;
 mod set;
 mod world;
 
+pub use attach::{AttachError, Attachment};
 pub use body::{Deformable, DeformableBuilder};
 pub use error::BuildError;
+pub use events::{ChannelEventCollector, DeformableContactEvent, DeformableEventHandler};
 pub use material::{Material, Stiffness};
 pub use mesh::{CellKind, Mesh};
 pub use model::{ElementModel, RotationFit, ShapeDamping};

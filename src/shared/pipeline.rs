@@ -10,19 +10,22 @@
 //!    longer than the edge-repulsion crossing limiter allows — so a stiffening barrier gets
 //!    more substeps and a resting body no more than it needs;
 //! 3. `v += h (f/m + g)` (symplectic Euler, the papers' integrator);
-//! 4. contacts, on velocities (and pushing out nodes found inside);
-//! 5. `x += h v`.
+//! 4. bound nodes follow their bones (see [`super::attach`]);
+//! 5. contacts on velocities: nodes against colliders, then rigid features against surface
+//!    facets (see [`super::contact`]);
+//! 6. `x += h v`.
 //!
-//! After the step: impulses go to dynamic rigid bodies, a state that turned non-finite is
-//! rolled back to the start of the step and frozen, and the report is filled in.
+//! After the step a state that turned non-finite is rolled back to the start of the step and
+//! frozen, contact events are sent, and the report is filled in.
 
 use std::time::Instant;
 
 use super::body::Deformable;
-use super::contact::{self, Candidate};
-use super::math::{Real, Vector};
+use super::contact::{self, BodyMotion, Candidate, MotionKind};
+use super::events::{DeformableContactEvent, DeformableEventHandler};
+use super::math::{self, Real, Vector, FACET_ARITY};
 use super::rapier::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
-use super::rapier::geometry::{Aabb, BoundingVolume, BroadPhaseBvh, ColliderSet};
+use super::rapier::geometry::{Aabb, BoundingVolume, BroadPhaseBvh, ColliderHandle, ColliderSet};
 use super::report::StepReport;
 use super::set::DeformableSet;
 
@@ -58,9 +61,26 @@ impl Default for PipelineSettings {
 pub struct DeformablePipeline {
     /// The knobs.
     pub settings: PipelineSettings,
-    impulses: Vec<(RigidBodyHandle, Vector, Vector)>,
-    touched: Vec<bool>,
+    scratch: Scratch,
     report: StepReport,
+}
+
+#[derive(Clone, Debug, Default)]
+struct Scratch {
+    near: Vec<ColliderHandle>,
+    motions: Vec<BodyMotion>,
+    attached_bodies: Vec<RigidBodyHandle>,
+    /// Per surface node (CSR): candidate indices.
+    node_start: Vec<u32>,
+    node_cands: Vec<u32>,
+    /// Per surface facet (CSR): candidate indices.
+    facet_start: Vec<u32>,
+    facet_cands: Vec<u32>,
+    /// Surface position of each node (or `u32::MAX`).
+    surface_slot: Vec<u32>,
+    touched_nodes: Vec<bool>,
+    touched_colliders: Vec<bool>,
+    targets: Vec<Vector>,
 }
 
 /// Largest stable symplectic-Euler substep for the given per-node bounds.
@@ -81,6 +101,32 @@ pub(crate) fn stable_substep(masses: &[Real], stiffness: &[Real], damping: &[Rea
     h
 }
 
+/// How far any collider attached to a moving body may travel in `dt` (a margin for broad-phase
+/// boxes, which rapier stores at the bodies' current poses).
+fn moving_margin(bodies: &RigidBodySet, colliders: &ColliderSet, dt: Real) -> Real {
+    let mut margin: Real = 0.0;
+    for (_, co) in colliders.iter() {
+        let Some(body) = co.parent().and_then(|p| bodies.get(p)) else {
+            continue;
+        };
+        if body.is_fixed() {
+            continue;
+        }
+        let radius = co.compute_aabb().half_extents().length()
+            + (co.position().translation - body.center_of_mass()).length();
+        let travel = if body.is_kinematic()
+            && body.body_type() == super::rapier::dynamics::RigidBodyType::KinematicPositionBased
+        {
+            let m = BodyMotion::new(RigidBodyHandle::invalid(), body, dt);
+            m.travel(radius)
+        } else {
+            (body.linvel().length() + math::ang_norm(body.angvel()) * radius) * dt
+        };
+        margin = margin.max(travel);
+    }
+    margin
+}
+
 impl DeformablePipeline {
     /// A pipeline with default settings.
     pub fn new() -> Self {
@@ -93,8 +139,8 @@ impl DeformablePipeline {
     }
 
     /// Advances every deformable by `params.dt`. Call it before rapier's
-    /// `PhysicsPipeline::step`, with the same sets: it reads collider poses through the broad
-    /// phase and applies contact impulses to dynamic bodies.
+    /// `PhysicsPipeline::step`, with the same sets: it reads bodies and colliders, moves bound
+    /// nodes with their bones, and applies impulses to dynamic bodies.
     pub fn step(
         &mut self,
         gravity: Vector,
@@ -104,33 +150,70 @@ impl DeformablePipeline {
         colliders: &ColliderSet,
         broad_phase: &BroadPhaseBvh,
     ) -> &StepReport {
+        self.step_with_events(
+            gravity,
+            params,
+            deformables,
+            bodies,
+            colliders,
+            broad_phase,
+            &(),
+        )
+    }
+
+    /// [`DeformablePipeline::step`], sending contact start/stop events to `events`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn step_with_events(
+        &mut self,
+        gravity: Vector,
+        params: &IntegrationParameters,
+        deformables: &mut DeformableSet,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        broad_phase: &BroadPhaseBvh,
+        events: &dyn DeformableEventHandler,
+    ) -> &StepReport {
         let start = Instant::now();
         let dt = params.dt;
         self.report.dt = dt;
         self.report.deformables.clear();
-        let mut candidates: Vec<Candidate<'_>> = Vec::new();
+        let margin = moving_margin(bodies, colliders, dt);
         for (handle, body) in deformables.iter_mut() {
-            self.impulses.clear();
+            let detached = body.prune_attachments(bodies);
             if !body.frozen && dt > 0.0 {
-                self.step_one(
-                    body,
-                    gravity,
-                    dt,
-                    bodies,
-                    colliders,
-                    broad_phase,
-                    &mut candidates,
-                );
-                for (b, impulse, point) in self.impulses.drain(..) {
-                    if let Some(rb) = bodies.get_mut(b) {
-                        rb.apply_impulse_at_point(impulse, point, true);
-                    }
-                }
+                self.step_one(body, gravity, dt, margin, bodies, colliders, broad_phase);
             } else {
                 body.report.substeps = 0;
                 body.report.contacts = 0;
                 body.report.frozen = body.frozen;
+                self.scratch.near.clear();
+                self.scratch.touched_colliders.clear();
             }
+            body.report.detached = detached;
+            body.report.attached_nodes = body.attachments.len();
+            // Contact events: the colliders touched this step against those of the last one.
+            let mut now: Vec<ColliderHandle> = self
+                .scratch
+                .near
+                .iter()
+                .zip(&self.scratch.touched_colliders)
+                .filter(|(_, t)| **t)
+                .map(|(h, _)| *h)
+                .collect();
+            now.sort_unstable_by_key(|h| h.into_raw_parts());
+            for c in body.touching.iter().filter(|c| !now.contains(c)) {
+                events.handle_contact_event(DeformableContactEvent::Stopped {
+                    deformable: handle,
+                    collider: *c,
+                });
+            }
+            for c in now.iter().filter(|c| !body.touching.contains(c)) {
+                events.handle_contact_event(DeformableContactEvent::Started {
+                    deformable: handle,
+                    collider: *c,
+                });
+            }
+            body.touching = now;
             self.report.deformables.push((handle, body.report.clone()));
         }
         self.report.wall_time = start.elapsed().as_secs_f64();
@@ -138,51 +221,160 @@ impl DeformablePipeline {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn step_one<'c>(
+    fn step_one(
         &mut self,
         body: &mut Deformable,
         gravity: Vector,
         dt: Real,
-        bodies: &RigidBodySet,
-        colliders: &'c ColliderSet,
+        margin: Real,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
         broad_phase: &BroadPhaseBvh,
-        candidates: &mut Vec<Candidate<'c>>,
     ) {
         let settings = self.settings;
+        let sc = &mut self.scratch;
         let g = gravity * body.gravity_scale;
         let n = body.positions.len();
         body.saved_positions.copy_from_slice(&body.positions);
         body.saved_velocities.copy_from_slice(&body.velocities);
         let mut time_forces = 0.0;
-        let mut time_contacts = 0.0;
 
-        // Broad phase: colliders near the box the surface sweeps this step.
+        // Bodies this deformable is bound to, and how every relevant body moves.
         let t0 = Instant::now();
+        sc.motions.clear();
+        sc.attached_bodies.clear();
+        for a in &body.attachments {
+            if !sc.attached_bodies.contains(&a.body) {
+                sc.attached_bodies.push(a.body);
+            }
+        }
+        let motion_of = |motions: &mut Vec<BodyMotion>,
+                         handle: RigidBodyHandle,
+                         bodies: &RigidBodySet|
+         -> Option<usize> {
+            if let Some(k) = motions.iter().position(|m| m.handle == handle) {
+                return Some(k);
+            }
+            let b = bodies.get(handle)?;
+            motions.push(BodyMotion::new(handle, b, dt));
+            Some(motions.len() - 1)
+        };
+        let attachment_motion: Vec<usize> = body
+            .attachments
+            .iter()
+            .map(|a| motion_of(&mut sc.motions, a.body, bodies).unwrap_or(usize::MAX))
+            .collect();
+
+        // Broad phase, once per deformable and then once per surface node.
         let surface = body.mesh.boundary_nodes();
+        let facets = body.mesh.boundary_facets();
         let mut region = Aabb::new_invalid();
+        let mut shortest = Real::INFINITY;
         for &i in surface {
             let p = body.positions[i as usize];
             region.take_point(p);
             region.take_point(p + body.velocities[i as usize] * dt + g * (0.5 * dt * dt));
         }
-        let margin = 0.01 * (region.maxs - region.mins).max_element().max(1e-3);
-        contact::gather(
-            region.loosened(margin),
-            dt,
+        for f in facets {
+            for a in 0..FACET_ARITY {
+                for b in a + 1..FACET_ARITY {
+                    shortest = shortest
+                        .min(body.positions[f[a] as usize].distance(body.positions[f[b] as usize]));
+                }
+            }
+        }
+        // Element forces can turn a node around within the step: widen every box by a quarter
+        // of the shortest surface edge, on top of the motion predicted from the velocities.
+        let size = (region.maxs - region.mins).max_element().max(1e-3);
+        let node_margin = if shortest.is_finite() {
+            0.25 * shortest
+        } else {
+            0.0
+        } + 1e-3 * size
+            + 1e-4;
+        let region = region.loosened(node_margin + margin);
+        contact::near_colliders(
+            region,
             &body.contact,
+            &sc.attached_bodies,
             bodies,
             colliders,
             broad_phase,
-            candidates,
+            &mut sc.near,
         );
-        self.touched.clear();
-        self.touched.resize(surface.len(), false);
-        time_contacts += t0.elapsed().as_secs_f64();
+        let mut candidates: Vec<Candidate<'_>> = Vec::with_capacity(sc.near.len());
+        for &h in &sc.near {
+            let Some(co) = colliders.get(h) else { continue };
+            let m = co
+                .parent()
+                .and_then(|p| motion_of(&mut sc.motions, p, bodies));
+            candidates.push(contact::candidate(
+                h,
+                co,
+                m,
+                &sc.motions,
+                &body.contact,
+                &region,
+                0.5 * shortest.max(1e-4),
+            ));
+        }
+        sc.near.clear();
+        sc.near.extend(candidates.iter().map(|c| c.handle));
+        sc.touched_colliders.clear();
+        sc.touched_colliders.resize(candidates.len(), false);
+
+        sc.surface_slot.clear();
+        sc.surface_slot.resize(n, u32::MAX);
+        sc.node_start.clear();
+        sc.node_cands.clear();
+        sc.node_start.push(0);
+        for (k, &i) in surface.iter().enumerate() {
+            sc.surface_slot[i as usize] = k as u32;
+            if !candidates.is_empty() && !body.is_attached(i) {
+                let p = body.positions[i as usize];
+                let mut b = Aabb::new_invalid();
+                b.take_point(p);
+                b.take_point(p + body.velocities[i as usize] * dt + g * (0.5 * dt * dt));
+                let b = b.loosened(node_margin + margin);
+                contact::node_candidates(
+                    b,
+                    &body.contact,
+                    bodies,
+                    colliders,
+                    broad_phase,
+                    &candidates,
+                    &mut sc.node_cands,
+                );
+            }
+            sc.node_start.push(sc.node_cands.len() as u32);
+        }
+        sc.facet_start.clear();
+        sc.facet_cands.clear();
+        sc.facet_start.push(0);
+        for f in facets {
+            let begin = sc.facet_cands.len();
+            for &i in f {
+                let k = sc.surface_slot[i as usize] as usize;
+                for idx in sc.node_start[k]..sc.node_start[k + 1] {
+                    let c = sc.node_cands[idx as usize];
+                    if !sc.facet_cands[begin..].contains(&c)
+                        && !candidates[c as usize].features.is_empty()
+                    {
+                        sc.facet_cands.push(c);
+                    }
+                }
+            }
+            sc.facet_start.push(sc.facet_cands.len() as u32);
+        }
+        sc.touched_nodes.clear();
+        sc.touched_nodes.resize(surface.len(), false);
+        let mut time_contacts = t0.elapsed().as_secs_f64();
 
         let mut t = 0.0;
         let mut substeps = 0;
         let mut limiter_substeps = 0;
         let mut cap_hit = false;
+        let mut facet_contacts = 0;
         loop {
             let remaining = dt - t;
             if let Some(k) = settings.fixed_substeps {
@@ -211,20 +403,19 @@ impl DeformablePipeline {
                     if body.limiter < stable {
                         limiter_substeps += 1;
                     }
-                    if substeps + 1 >= settings.max_substeps {
+                    if substeps + 1 >= settings.max_substeps
+                        || bound.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+                    {
                         cap_hit = true;
                         remaining
-                    } else if bound.is_finite() && bound > 0.0 {
-                        let pieces = (remaining / bound).ceil().max(1.0);
-                        remaining / pieces
-                    } else if bound > 0.0 {
-                        remaining
+                    } else if bound.is_finite() {
+                        remaining / (remaining / bound).ceil().max(1.0)
                     } else {
-                        cap_hit = true;
                         remaining
                     }
                 }
             };
+            let s1 = ((t + h) / dt).min(1.0);
 
             // Symplectic Euler, velocities first.
             body.scratch_velocities.copy_from_slice(&body.velocities);
@@ -232,10 +423,54 @@ impl DeformablePipeline {
                 body.velocities[i] += (body.acc.force[i] * body.inv_masses[i] + g) * h;
             }
 
-            // Contacts on velocities, before positions move.
+            // Bound nodes follow their bones.
+            sc.targets.clear();
+            for (k, a) in body.attachments.iter().enumerate() {
+                let m = attachment_motion[k];
+                if m == usize::MAX {
+                    sc.targets.push(Vector::NAN);
+                    continue;
+                }
+                let motion = sc.motions[m];
+                let i = a.node as usize;
+                let target = motion.pose_at(s1, dt, bodies).transform_point(a.anchor);
+                let desired = (target - body.positions[i]) / h;
+                if motion.kind == MotionKind::Dynamic {
+                    let Some(rb) = bodies.get_mut(a.body) else {
+                        sc.targets.push(Vector::NAN);
+                        continue;
+                    };
+                    let delta = desired - body.velocities[i];
+                    let len = delta.length();
+                    if len > 0.0 {
+                        let dir = delta / len;
+                        let props = rb.mass_properties();
+                        let r = target - rb.center_of_mass();
+                        let rn = math::cross(r, dir);
+                        let w_body = (props.effective_inv_mass * dir).dot(dir)
+                            + math::ang_dot(rn, props.effective_world_inv_inertia * rn);
+                        let impulse = delta / (body.inv_masses[i] + w_body);
+                        body.velocities[i] += impulse * body.inv_masses[i];
+                        rb.apply_impulse_at_point(-impulse, target, true);
+                    }
+                    sc.targets.push(Vector::NAN);
+                } else {
+                    body.velocities[i] = desired;
+                    sc.targets.push(target);
+                }
+            }
+
+            // Contacts, on velocities, before positions move.
             if !candidates.is_empty() {
                 let tc = Instant::now();
+                for c in candidates.iter_mut() {
+                    c.pose = c.pose_at(s1, dt, &sc.motions, bodies);
+                }
                 for (k, &i) in surface.iter().enumerate() {
+                    let (b0, b1) = (sc.node_start[k] as usize, sc.node_start[k + 1] as usize);
+                    if b0 == b1 {
+                        continue;
+                    }
                     let i = i as usize;
                     let (mut x, mut v) = (body.positions[i], body.velocities[i]);
                     if let Some(c) = contact::resolve_node(
@@ -244,15 +479,62 @@ impl DeformablePipeline {
                         body.scratch_velocities[i],
                         body.masses[i],
                         h,
+                        s1,
+                        dt,
                         settings.restitution_threshold,
-                        candidates,
+                        &sc.node_cands[b0..b1],
+                        &candidates,
+                        &sc.motions,
                         bodies,
                     ) {
                         body.positions[i] = x;
                         body.velocities[i] = v;
-                        self.touched[k] = true;
-                        if let (Some(b), true) = (c.body, c.dynamic) {
-                            self.impulses.push((b, c.impulse, c.point));
+                        sc.touched_nodes[k] = true;
+                        sc.touched_colliders[c.candidate] = true;
+                        let cand = &candidates[c.candidate];
+                        if cand.dynamic {
+                            if let Some(rb) = cand.body(&sc.motions).and_then(|b| bodies.get_mut(b))
+                            {
+                                rb.apply_impulse_at_point(-c.impulse, c.point, true);
+                            }
+                        }
+                    }
+                }
+                for (f, facet) in facets.iter().enumerate() {
+                    let (b0, b1) = (sc.facet_start[f] as usize, sc.facet_start[f + 1] as usize);
+                    if b0 == b1 {
+                        continue;
+                    }
+                    let y: [Vector; FACET_ARITY] = std::array::from_fn(|a| {
+                        let i = facet[a] as usize;
+                        body.positions[i] + body.velocities[i] * h
+                    });
+                    let im: [Real; FACET_ARITY] = std::array::from_fn(|a| {
+                        let i = facet[a];
+                        if body.is_attached(i) {
+                            0.0
+                        } else {
+                            body.inv_masses[i as usize]
+                        }
+                    });
+                    if let Some(fc) =
+                        contact::resolve_facet(&y, &im, &sc.facet_cands[b0..b1], &candidates)
+                    {
+                        let mut gained = Vector::ZERO;
+                        for a in 0..FACET_ARITY {
+                            let i = facet[a] as usize;
+                            let dv = fc.normal * (fc.weights[a] * im[a] * fc.lambda / h);
+                            body.velocities[i] += dv;
+                            gained += dv * body.masses[i] * if im[a] > 0.0 { 1.0 } else { 0.0 };
+                        }
+                        facet_contacts += 1;
+                        sc.touched_colliders[fc.candidate] = true;
+                        let cand = &candidates[fc.candidate];
+                        if cand.dynamic {
+                            if let Some(rb) = cand.body(&sc.motions).and_then(|b| bodies.get_mut(b))
+                            {
+                                rb.apply_impulse_at_point(-gained, fc.point, true);
+                            }
                         }
                     }
                 }
@@ -262,6 +544,11 @@ impl DeformablePipeline {
             for i in 0..n {
                 body.positions[i] += body.velocities[i] * h;
             }
+            for (a, target) in body.attachments.iter().zip(&sc.targets) {
+                if target.is_finite() {
+                    body.positions[a.node as usize] = *target;
+                }
+            }
             body.forces_valid = false;
             t += h;
             substeps += 1;
@@ -270,24 +557,24 @@ impl DeformablePipeline {
         let ti = Instant::now();
         let finite = body.positions.iter().all(|p| p.is_finite())
             && body.velocities.iter().all(|v| v.is_finite());
-        let r = &mut body.report;
-        r.non_finite = !finite;
+        body.report.non_finite = !finite;
         if !finite {
             body.positions.copy_from_slice(&body.saved_positions);
             body.velocities.copy_from_slice(&body.saved_velocities);
             body.frozen = true;
             body.forces_valid = false;
-            self.impulses.clear();
         }
-        r.frozen = body.frozen;
-        r.substeps = substeps;
-        r.limiter_substeps = limiter_substeps;
-        r.substep_cap_hit = cap_hit;
-        r.contacts = self.touched.iter().filter(|t| **t).count();
-        r.max_penetration = surface
-            .iter()
-            .map(|&i| contact::penetration(body.positions[i as usize], candidates))
-            .fold(0.0, Real::max);
+        let mut max_penetration: Real = 0.0;
+        for (k, &i) in surface.iter().enumerate() {
+            let (b0, b1) = (sc.node_start[k] as usize, sc.node_start[k + 1] as usize);
+            if b0 < b1 {
+                max_penetration = max_penetration.max(contact::penetration(
+                    body.positions[i as usize],
+                    &sc.node_cands[b0..b1],
+                    &candidates,
+                ));
+            }
+        }
         let mut inverted = 0;
         let mut min_ratio = Real::INFINITY;
         for c in 0..body.mesh.num_cells() {
@@ -297,22 +584,27 @@ impl DeformablePipeline {
             }
             min_ratio = min_ratio.min(q);
         }
-        let r = &mut body.report;
-        r.inverted_elements = inverted;
-        r.min_volume_ratio = min_ratio;
-        r.kinetic_energy = body
-            .velocities
-            .iter()
-            .zip(&body.masses)
-            .map(|(v, m)| 0.5 * m * v.length_squared())
-            .sum();
-        r.gravity_energy = -body
+        let kinetic = body.kinetic_energy();
+        let gravity_energy = -body
             .positions
             .iter()
             .zip(&body.masses)
             .map(|(x, m)| m * g.dot(*x))
             .sum::<Real>();
-        r.elastic_energy = body.state.elastic_energy(&body.positions);
+        let elastic = body.state.elastic_energy(&body.positions);
+        let r = &mut body.report;
+        r.frozen = body.frozen;
+        r.substeps = substeps;
+        r.limiter_substeps = limiter_substeps;
+        r.substep_cap_hit = cap_hit;
+        r.contacts = sc.touched_nodes.iter().filter(|t| **t).count();
+        r.facet_contacts = facet_contacts;
+        r.max_penetration = max_penetration;
+        r.inverted_elements = inverted;
+        r.min_volume_ratio = min_ratio;
+        r.kinetic_energy = kinetic;
+        r.gravity_energy = gravity_energy;
+        r.elastic_energy = elastic;
         r.time_forces = time_forces;
         r.time_contacts = time_contacts;
         r.time_integrate = ti.elapsed().as_secs_f64();

@@ -25,6 +25,12 @@ pub struct DeformableReport {
     pub max_penetration: Real,
     /// Surface nodes that touched a collider during the step.
     pub contacts: usize,
+    /// Facet contacts (a rigid feature pushing a surface facet) summed over the substeps.
+    pub facet_contacts: usize,
+    /// Nodes bound to rigid bodies.
+    pub attached_nodes: usize,
+    /// Bindings dropped at the start of the step because their body was removed.
+    pub detached: usize,
     /// Substeps taken.
     pub substeps: usize,
     /// Substeps whose size the edge-repulsion crossing limiter chose (tighter than the

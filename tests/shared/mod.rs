@@ -3,5 +3,6 @@
 mod elements;
 mod errors;
 mod fall;
+mod mesh;
 mod pipeline;
 mod support;

@@ -306,10 +306,10 @@ impl Mesh {
                 on_boundary[i as usize] = true;
             }
             // Fan-split polygons into simplicial facets (a quad face into two triangles).
-            for k in 1..=ids.len() - FACET_ARITY {
+            for k in 0..=ids.len() - FACET_ARITY {
                 let mut f = [0u32; FACET_ARITY];
                 f[0] = ids[0];
-                f[1..].copy_from_slice(&ids[k..k + FACET_ARITY - 1]);
+                f[1..].copy_from_slice(&ids[k + 1..k + FACET_ARITY]);
                 self.boundary_facets.push(f);
             }
         }
