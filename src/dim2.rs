@@ -166,6 +166,12 @@ pub mod math {
         let edges = (0..n).map(|i| [i, (i + 1) % n]).collect();
         Some((poly.points().to_vec(), edges))
     }
+
+    /// A rotation angle in the x-y plane, as an angular quantity.
+    #[inline]
+    pub fn planar_angle(theta: Real) -> AngVector {
+        theta
+    }
 }
 
 #[path = "shared/mod.rs"]

@@ -225,6 +225,12 @@ pub mod math {
             .collect();
         Some((poly.points().to_vec(), edges))
     }
+
+    /// A rotation angle about the axis normal to the x-y plane, as an angular quantity.
+    #[inline]
+    pub fn planar_angle(theta: Real) -> AngVector {
+        Vector::new(0.0, 0.0, theta)
+    }
 }
 
 #[path = "shared/mod.rs"]

@@ -3,6 +3,11 @@
 
 pub use sinew::dim2 as dim;
 
+/// A revolute joint about the axis normal to the x-y plane (dimension-specific constructor).
+pub fn planar_revolute() -> sinew::dim2::rapier::dynamics::RevoluteJointBuilder {
+    sinew::dim2::rapier::dynamics::RevoluteJointBuilder::new()
+}
+
 #[path = "shared/mod.rs"]
 mod shared;
 

@@ -2,5 +2,10 @@
 
 pub use sinew::dim3 as dim;
 
+/// A revolute joint about the axis normal to the x-y plane (dimension-specific constructor).
+pub fn planar_revolute() -> sinew::dim3::rapier::dynamics::RevoluteJointBuilder {
+    sinew::dim3::rapier::dynamics::RevoluteJointBuilder::new(sinew::dim3::math::Vector::Z)
+}
+
 #[path = "shared/mod.rs"]
 mod shared;

@@ -50,6 +50,9 @@ pub enum AttachError {
         /// Number of nodes.
         nodes: usize,
     },
+    /// The deformable handle is stale.
+    #[error("the deformable is not in the set (removed, or never inserted)")]
+    NoSuchDeformable,
     /// A tolerance is negative or not finite.
     #[error("tolerance must be non-negative and finite, got {0}")]
     BadTolerance(Real),

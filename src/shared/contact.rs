@@ -32,8 +32,8 @@
 //! nodes of a coarse mesh without touching any of them. So each substep the vertices of
 //! cuboids and convex polytopes, points sampled along their edges (spacing half the shortest
 //! surface edge), and the deepest points of balls and capsules are tested against the
-//! deformable's surface facets (triangles in 3D, segments in 2D): a feature behind a facet,
-//! within the facet's prism and less than a facet size deep, moves the facet's nodes (mass- and
+//! deformable's surface facets (triangles in 3D, segments in 2D): a feature that crosses a
+//! facet's plane during the substep inside the facet's prism moves the facet's nodes (mass- and
 //! barycentric-weighted velocity change) so the facet ends the substep on the feature, and the
 //! opposite impulse goes to a dynamic body. Not covered: features of trimeshes, heightfields,
 //! compound and other shapes (their surfaces still stop nodes), and friction on facet contacts.
@@ -163,6 +163,8 @@ pub(crate) struct Candidate<'a> {
     pub features: Vec<Feature>,
     /// Pose at the end of the current substep.
     pub pose: Pose,
+    /// Pose at the start of the current substep.
+    pub prev_pose: Pose,
 }
 
 impl Candidate<'_> {
@@ -251,6 +253,7 @@ pub(crate) fn candidate<'a>(
         restitution,
         features,
         pose: pose0,
+        prev_pose: pose0,
     }
 }
 
@@ -355,10 +358,29 @@ fn features(
     out
 }
 
+/// Whether rapier's broad phase indexes every collider. It is filled by rapier's step, so
+/// before the first step, or after colliders were added since the last, it is not; the
+/// candidates are then found by testing every collider's box instead.
+pub(crate) fn broad_phase_is_current(
+    broad_phase: &BroadPhaseBvh,
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+) -> bool {
+    let qp = broad_phase.as_query_pipeline(
+        &DefaultQueryDispatcher,
+        bodies,
+        colliders,
+        QueryFilter::default(),
+    );
+    qp.bvh.leaf_count() as usize == colliders.len()
+}
+
 /// Collects the colliders that the broad phase reports near `region` (one BVH query per
 /// deformable), skipping sensors, filtered groups and (optionally) bound bodies.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn near_colliders(
     region: Aabb,
+    indexed: bool,
     material: &ContactMaterial,
     attached_bodies: &[RigidBodyHandle],
     bodies: &RigidBodySet,
@@ -370,22 +392,34 @@ pub(crate) fn near_colliders(
     let filter = QueryFilter::default()
         .exclude_sensors()
         .groups(material.groups);
-    let qp = broad_phase.as_query_pipeline(&DefaultQueryDispatcher, bodies, colliders, filter);
-    for (handle, co) in qp.intersect_aabb_conservative(region) {
-        if material.ignore_attached_bodies
-            && co.parent().is_some_and(|p| attached_bodies.contains(&p))
-        {
-            continue;
+    let keep = |co: &Collider| {
+        !(material.ignore_attached_bodies
+            && co.parent().is_some_and(|p| attached_bodies.contains(&p)))
+    };
+    if indexed {
+        let qp = broad_phase.as_query_pipeline(&DefaultQueryDispatcher, bodies, colliders, filter);
+        for (handle, co) in qp.intersect_aabb_conservative(region) {
+            if keep(co) {
+                out.push(handle);
+            }
         }
-        out.push(handle);
+    } else {
+        for (handle, co) in colliders.iter() {
+            if filter.test(bodies, handle, co) && keep(co) && co.compute_aabb().intersects(&region)
+            {
+                out.push(handle);
+            }
+        }
     }
     out.sort_unstable_by_key(|h| h.into_raw_parts());
 }
 
 /// Per-node broad phase: the candidates whose BVH boxes overlap `node_box`, as indices into
 /// `candidates`, appended to `out`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn node_candidates(
     node_box: Aabb,
+    indexed: bool,
     material: &ContactMaterial,
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
@@ -393,6 +427,14 @@ pub(crate) fn node_candidates(
     candidates: &[Candidate<'_>],
     out: &mut Vec<u32>,
 ) {
+    if !indexed {
+        for (k, c) in candidates.iter().enumerate() {
+            if c.swept.intersects(&node_box) {
+                out.push(k as u32);
+            }
+        }
+        return;
+    }
     let filter = QueryFilter::default()
         .exclude_sensors()
         .groups(material.groups);
@@ -447,37 +489,42 @@ pub(crate) fn resolve_node(
             continue;
         }
         if shape.contains_point(pose, start) {
-            // Where did it come in? Back along its motion relative to the collider, no further
-            // than it moved in a substep (plus the depth), so a node deep in a thin plate goes
-            // back out the side it entered, and a node sliding along a face is not sent to a
-            // far edge.
-            let proj = shape.project_point(pose, start, false);
-            let depth = (proj.point - start).length();
+            // Out by the closest surface point, unless that is the far side of a thin collider
+            // the node has crossed the middle of: then back out of the face it came in by (a
+            // ray cast back along its motion relative to the collider, no further than it moved
+            // in a substep), along that face's normal so that it is not dragged back along the
+            // surface.
+            // The normal comes from the feature projected on (a face's own normal), not from
+            // the tiny, noisy offset of a node a hair inside.
+            let local = pose.inverse_transform_point(start);
+            let (proj, feature) = shape.project_local_point_and_get_feature(local);
+            let offset = proj.point - local;
+            let depth = offset.length();
+            if depth <= Real::EPSILON {
+                continue;
+            }
+            let mut point = pose.transform_point(proj.point);
+            let mut normal = shape
+                .feature_normal_at_point(Default::default(), feature, proj.point)
+                .filter(|n| n.is_finite() && n.length_squared() > 0.5)
+                .map_or_else(|| pose.rotation * (offset / depth), |n| pose.rotation * n);
             let rel = v_before - cand.point_velocity(start, s1, dt, motions, bodies);
-            let mut entry = None;
             if rel.length_squared() > 1e-12 {
                 let back = Ray::new(start, -rel.normalize());
                 let reach = rel.length() * h + 2.0 * depth + 1e-6;
                 if let Some(hit) = shape.cast_ray_and_get_normal(pose, &back, reach, false) {
                     // Leaving the shape: the outward normal points along the ray.
-                    let normal = if hit.normal.dot(back.dir) < 0.0 {
+                    let nb = if hit.normal.dot(back.dir) < 0.0 {
                         -hit.normal
                     } else {
                         hit.normal
                     };
-                    entry = Some((back.point_at(hit.time_of_impact), normal));
+                    if nb.length_squared() > 0.5 && nb.dot(normal) < 0.0 {
+                        normal = nb;
+                        point = start + nb * nb.dot(back.point_at(hit.time_of_impact) - start);
+                    }
                 }
             }
-            let (point, normal) = match entry {
-                Some((p, n)) if n.length_squared() > 0.5 => (p, n),
-                _ => {
-                    let out = proj.point - start;
-                    if depth <= Real::EPSILON {
-                        continue;
-                    }
-                    (proj.point, out / depth)
-                }
-            };
             let depth = (point - start).length();
             if best.is_none_or(|b| !b.4 || depth > (b.2 - start).length()) {
                 best = Some((0.0, normal, point, ci, true));
@@ -548,26 +595,31 @@ pub(crate) struct FacetContact {
     pub normal: Vector,
 }
 
-/// Tests the features of the facet's candidates against the facet at predicted positions `y`
-/// (outward oriented); returns the deepest violation.
+/// Tests the features of the facet's candidates against the facet, which moves from `x`
+/// (substep start) to `y` (predicted end), both outward oriented. A feature counts only if it
+/// crosses the facet's plane during the substep (outside at the start, within a sliver of
+/// tolerance, and behind it at the end) inside the facet's prism: a feature deep behind one
+/// facet belongs to another. Returns the deepest crossing.
 pub(crate) fn resolve_facet(
+    x: &[Vector; FACET_ARITY],
     y: &[Vector; FACET_ARITY],
     inv_masses: &[Real; FACET_ARITY],
     candidate_ids: &[u32],
     candidates: &[Candidate<'_>],
 ) -> Option<FacetContact> {
-    let normal = math::facet_normal(y);
-    let len = normal.length();
-    if len <= Real::MIN_POSITIVE {
-        return None;
-    }
-    let n = normal / len;
+    let unit = |q: &[Vector; FACET_ARITY]| -> Option<Vector> {
+        let normal = math::facet_normal(q);
+        let len = normal.length();
+        (len > Real::MIN_POSITIVE).then(|| normal / len)
+    };
+    let (n0, n) = (unit(x)?, unit(y)?);
     let mut size: Real = 0.0;
     for a in 0..FACET_ARITY {
         for b in a + 1..FACET_ARITY {
             size = size.max(y[a].distance(y[b]));
         }
     }
+    let tolerance = 1e-3 * size;
     let denom_of = |w: &[Real; FACET_ARITY]| -> Real {
         w.iter().zip(inv_masses).map(|(w, im)| w * w * im).sum()
     };
@@ -577,7 +629,11 @@ pub(crate) fn resolve_facet(
         for f in &cand.features {
             let p = cand.pose.transform_point(f.local) - n * f.radius;
             let d = n.dot(p - y[0]);
-            if d >= 0.0 || d < -size {
+            if d >= 0.0 {
+                continue;
+            }
+            let p0 = cand.prev_pose.transform_point(f.local) - n0 * f.radius;
+            if n0.dot(p0 - x[0]) < -tolerance {
                 continue;
             }
             let w = math::facet_barycentric(y, p);

@@ -36,7 +36,7 @@ pub struct PipelineSettings {
     /// Gershgorin bound overestimates ω by 1.3–1.8×, and damping and nonlinearity eat the rest).
     pub safety: Real,
     /// Largest number of substeps per step (default 20 000). When reached, the rest of the
-    /// step is taken in one substep and the report says so.
+    /// step is skipped for that body and the report says so.
     pub max_substeps: usize,
     /// A fixed substep count instead of the automatic one (for experiments such as the
     /// dt sweep; `None`, the default, is automatic).
@@ -82,6 +82,9 @@ struct Scratch {
     touched_colliders: Vec<bool>,
     targets: Vec<Vector>,
 }
+
+/// Fraction of a dynamically bound node's position error corrected per substep.
+const DYNAMIC_BINDING_CORRECTION: Real = 0.2;
 
 /// Largest stable symplectic-Euler substep for the given per-node bounds.
 pub(crate) fn stable_substep(masses: &[Real], stiffness: &[Real], damping: &[Real]) -> Real {
@@ -178,10 +181,20 @@ impl DeformablePipeline {
         self.report.dt = dt;
         self.report.deformables.clear();
         let margin = moving_margin(bodies, colliders, dt);
+        let indexed = contact::broad_phase_is_current(broad_phase, bodies, colliders);
         for (handle, body) in deformables.iter_mut() {
             let detached = body.prune_attachments(bodies);
             if !body.frozen && dt > 0.0 {
-                self.step_one(body, gravity, dt, margin, bodies, colliders, broad_phase);
+                self.step_one(
+                    body,
+                    gravity,
+                    dt,
+                    margin,
+                    indexed,
+                    bodies,
+                    colliders,
+                    broad_phase,
+                );
             } else {
                 body.report.substeps = 0;
                 body.report.contacts = 0;
@@ -227,6 +240,7 @@ impl DeformablePipeline {
         gravity: Vector,
         dt: Real,
         margin: Real,
+        indexed: bool,
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
         broad_phase: &BroadPhaseBvh,
@@ -295,6 +309,7 @@ impl DeformablePipeline {
         let region = region.loosened(node_margin + margin);
         contact::near_colliders(
             region,
+            indexed,
             &body.contact,
             &sc.attached_bodies,
             bodies,
@@ -338,6 +353,7 @@ impl DeformablePipeline {
                 let b = b.loosened(node_margin + margin);
                 contact::node_candidates(
                     b,
+                    indexed,
                     &body.contact,
                     bodies,
                     colliders,
@@ -351,16 +367,32 @@ impl DeformablePipeline {
         sc.facet_start.clear();
         sc.facet_cands.clear();
         sc.facet_start.push(0);
+        let with_features = candidates.iter().any(|c| !c.features.is_empty());
         for f in facets {
-            let begin = sc.facet_cands.len();
-            for &i in f {
-                let k = sc.surface_slot[i as usize] as usize;
-                for idx in sc.node_start[k]..sc.node_start[k + 1] {
-                    let c = sc.node_cands[idx as usize];
-                    if !sc.facet_cands[begin..].contains(&c)
-                        && !candidates[c as usize].features.is_empty()
-                    {
-                        sc.facet_cands.push(c);
+            if with_features && !f.iter().all(|&i| body.is_attached(i)) {
+                let mut b = Aabb::new_invalid();
+                for &i in f {
+                    let p = body.positions[i as usize];
+                    b.take_point(p);
+                    b.take_point(p + body.velocities[i as usize] * dt + g * (0.5 * dt * dt));
+                }
+                let begin = sc.facet_cands.len();
+                contact::node_candidates(
+                    b.loosened(node_margin + margin),
+                    indexed,
+                    &body.contact,
+                    bodies,
+                    colliders,
+                    broad_phase,
+                    &candidates,
+                    &mut sc.facet_cands,
+                );
+                let mut k = begin;
+                while k < sc.facet_cands.len() {
+                    if candidates[sc.facet_cands[k] as usize].features.is_empty() {
+                        sc.facet_cands.swap_remove(k);
+                    } else {
+                        k += 1;
                     }
                 }
             }
@@ -374,6 +406,7 @@ impl DeformablePipeline {
         let mut substeps = 0;
         let mut limiter_substeps = 0;
         let mut cap_hit = false;
+        let mut lost_time = 0.0;
         let mut facet_contacts = 0;
         loop {
             let remaining = dt - t;
@@ -406,8 +439,11 @@ impl DeformablePipeline {
                     if substeps + 1 >= settings.max_substeps
                         || bound.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
                     {
+                        // Out of substeps: drop the rest of the step for this body rather than
+                        // take it in one unstable leap (the report says how much time was lost).
                         cap_hit = true;
-                        remaining
+                        lost_time = remaining;
+                        break;
                     } else if bound.is_finite() {
                         remaining / (remaining / bound).ceil().max(1.0)
                     } else {
@@ -436,11 +472,18 @@ impl DeformablePipeline {
                 let target = motion.pose_at(s1, dt, bodies).transform_point(a.anchor);
                 let desired = (target - body.positions[i]) / h;
                 if motion.kind == MotionKind::Dynamic {
+                    let anchor_now = motion.pose_at(t / dt, dt, bodies).transform_point(a.anchor);
                     let Some(rb) = bodies.get_mut(a.body) else {
                         sc.targets.push(Vector::NAN);
                         continue;
                     };
-                    let delta = desired - body.velocities[i];
+                    // Velocity-level binding: the anchor's velocity plus a fraction of the
+                    // position error per substep (a full correction on a body whose joints
+                    // rapier solves later feeds energy into the pair).
+                    let v_anchor = rb.velocity_at_point(anchor_now);
+                    let wanted = v_anchor
+                        + (anchor_now - body.positions[i]) * (DYNAMIC_BINDING_CORRECTION / h);
+                    let delta = wanted - body.velocities[i];
                     let len = delta.length();
                     if len > 0.0 {
                         let dir = delta / len;
@@ -464,6 +507,7 @@ impl DeformablePipeline {
             if !candidates.is_empty() {
                 let tc = Instant::now();
                 for c in candidates.iter_mut() {
+                    c.prev_pose = c.pose;
                     c.pose = c.pose_at(s1, dt, &sc.motions, bodies);
                 }
                 for (k, &i) in surface.iter().enumerate() {
@@ -517,8 +561,10 @@ impl DeformablePipeline {
                             body.inv_masses[i as usize]
                         }
                     });
+                    let x: [Vector; FACET_ARITY] =
+                        std::array::from_fn(|a| body.positions[facet[a] as usize]);
                     if let Some(fc) =
-                        contact::resolve_facet(&y, &im, &sc.facet_cands[b0..b1], &candidates)
+                        contact::resolve_facet(&x, &y, &im, &sc.facet_cands[b0..b1], &candidates)
                     {
                         let mut gained = Vector::ZERO;
                         for a in 0..FACET_ARITY {
@@ -555,8 +601,9 @@ impl DeformablePipeline {
         }
 
         let ti = Instant::now();
-        let finite = body.positions.iter().all(|p| p.is_finite())
-            && body.velocities.iter().all(|v| v.is_finite());
+        // Non-finite, or so far out that it can only be a blow-up (|x| or |v| above 1e8).
+        let sane = |v: &Vector| v.is_finite() && v.abs().max_element() < 1e8;
+        let finite = body.positions.iter().all(sane) && body.velocities.iter().all(sane);
         body.report.non_finite = !finite;
         if !finite {
             body.positions.copy_from_slice(&body.saved_positions);
@@ -597,6 +644,7 @@ impl DeformablePipeline {
         r.substeps = substeps;
         r.limiter_substeps = limiter_substeps;
         r.substep_cap_hit = cap_hit;
+        r.lost_time = lost_time;
         r.contacts = sc.touched_nodes.iter().filter(|t| **t).count();
         r.facet_contacts = facet_contacts;
         r.max_penetration = max_penetration;

@@ -36,12 +36,15 @@ pub struct DeformableReport {
     /// Substeps whose size the edge-repulsion crossing limiter chose (tighter than the
     /// stability bound).
     pub limiter_substeps: usize,
-    /// Whether the substep cap ([`PipelineSettings::max_substeps`]) was reached.
+    /// Whether the substep cap ([`PipelineSettings::max_substeps`]) was reached; the rest of
+    /// the step was then skipped for this body ([`DeformableReport::lost_time`]).
     ///
     /// [`PipelineSettings::max_substeps`]: super::PipelineSettings::max_substeps
     pub substep_cap_hit: bool,
-    /// Whether the state turned non-finite during this step (the body was rolled back to the
-    /// start of the step and frozen).
+    /// Simulated time skipped because the substep cap was reached, s.
+    pub lost_time: Real,
+    /// Whether the state turned non-finite (or beyond 1e8 in position or velocity) during this
+    /// step: the body was rolled back to the start of the step and frozen.
     pub non_finite: bool,
     /// Whether the body is frozen (not simulated).
     pub frozen: bool,

@@ -1,9 +1,13 @@
 //! The bundled world for the simple case: rapier's `PhysicsWorld`, a `DeformableSet` and the
 //! pipeline, stepped in the right order.
 
+use super::attach::AttachError;
 use super::body::Deformable;
+use super::events::DeformableEventHandler;
 use super::math::Real;
 use super::pipeline::DeformablePipeline;
+use super::rapier::dynamics::{RigidBody, RigidBodyHandle};
+use super::rapier::geometry::ColliderHandle;
 use super::rapier::pipeline::PhysicsWorld;
 use super::report::StepReport;
 use super::set::{DeformableHandle, DeformableSet};
@@ -58,21 +62,65 @@ impl DeformableWorld {
         self.steps
     }
 
+    /// Binds nodes of a deformable to a rigid body at their current positions.
+    pub fn attach_nodes(
+        &mut self,
+        deformable: DeformableHandle,
+        body: RigidBodyHandle,
+        nodes: &[u32],
+    ) -> Result<usize, AttachError> {
+        let d = self
+            .deformables
+            .get_mut(deformable)
+            .ok_or(AttachError::NoSuchDeformable)?;
+        d.attach_nodes(&self.physics.bodies, body, nodes)
+    }
+
+    /// Binds every node of a deformable inside `collider` (or within `tolerance` of it) to the
+    /// collider's body.
+    pub fn attach_nodes_inside(
+        &mut self,
+        deformable: DeformableHandle,
+        collider: ColliderHandle,
+        tolerance: Real,
+    ) -> Result<usize, AttachError> {
+        let d = self
+            .deformables
+            .get_mut(deformable)
+            .ok_or(AttachError::NoSuchDeformable)?;
+        d.attach_nodes_inside(
+            &self.physics.bodies,
+            &self.physics.colliders,
+            collider,
+            tolerance,
+        )
+    }
+
+    /// Removes a rigid body (and its colliders and joints) from rapier and unbinds every node
+    /// bound to it.
+    pub fn remove_body(&mut self, body: RigidBodyHandle) -> Option<RigidBody> {
+        for (_, d) in self.deformables.iter_mut() {
+            d.detach_body(body);
+        }
+        self.physics.remove_body(body)
+    }
+
     /// One step: deformables first (they see colliders where rapier left them), then rapier.
     pub fn step(&mut self) -> &StepReport {
-        if self.steps == 0 {
-            // Rapier fills its broad phase during a step; before the first one it is empty and
-            // the deformables would see no collider.
-            self.physics.detect_collisions(&(), &());
-        }
+        self.step_with_events(&())
+    }
+
+    /// [`DeformableWorld::step`], sending deformable contact events to `events`.
+    pub fn step_with_events(&mut self, events: &dyn DeformableEventHandler) -> &StepReport {
         let w = &mut self.physics;
-        self.pipeline.step(
+        self.pipeline.step_with_events(
             w.gravity,
             &w.integration_parameters,
             &mut self.deformables,
             &mut w.bodies,
             &w.colliders,
             &w.broad_phase,
+            events,
         );
         self.physics.step();
         self.time += self.physics.integration_parameters.dt;

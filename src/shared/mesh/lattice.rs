@@ -111,3 +111,50 @@ impl Mesh {
         Mesh::new(nodes, cells, kind)
     }
 }
+
+impl Mesh {
+    /// A ball of the given radius, cut from a [`Mesh::cuboid`] lattice with `resolution` nodes
+    /// across its diameter: the cells whose centroid lies inside the ball are kept. The surface
+    /// is staircased at the lattice spacing.
+    pub fn ball(radius: Real, resolution: usize, kind: CellKind) -> Result<Mesh, BuildError> {
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(BuildError::InvalidParameter {
+                name: "radius",
+                value: radius,
+                expected: "a positive finite radius",
+            });
+        }
+        let lattice = Mesh::cuboid(Vector::splat(radius), [resolution; DIM], kind)?;
+        lattice.retain_cells(|cell| {
+            let c = cell.iter().copied().sum::<Vector>() / cell.len() as Real;
+            c.length() <= radius
+        })
+    }
+
+    /// A new mesh with only the cells for which `keep(cell vertex positions)` is true; nodes
+    /// no longer used are dropped and the rest renumbered in order.
+    pub fn retain_cells(
+        &self,
+        mut keep: impl FnMut(&[Vector]) -> bool,
+    ) -> Result<Mesh, BuildError> {
+        let mut pts = Vec::new();
+        let mut kept: Vec<u32> = Vec::new();
+        for c in self.cells() {
+            pts.clear();
+            pts.extend(c.iter().map(|&i| self.nodes()[i as usize]));
+            if keep(&pts) {
+                kept.extend_from_slice(c);
+            }
+        }
+        let mut remap = vec![u32::MAX; self.nodes().len()];
+        let mut nodes = Vec::new();
+        for i in kept.iter_mut() {
+            if remap[*i as usize] == u32::MAX {
+                remap[*i as usize] = nodes.len() as u32;
+                nodes.push(self.nodes()[*i as usize]);
+            }
+            *i = remap[*i as usize];
+        }
+        Mesh::new(nodes, kept, self.kind())
+    }
+}

@@ -23,7 +23,7 @@
 //!   (vertex through its facet) is also an equilibrium of eq. 5 and a cell that jumps there stays
 //!   inverted.
 //!
-//! The law is evaluated at `max(h, 10⁻³ h0)` so that an already inverted cell (reached only
+//! The law is evaluated at `max(h, 10⁻⁶ h0)` so that an already inverted cell (reached only
 //! through a crossing forced from outside, e.g. by a bone) is pushed back with a large but
 //! finite force.
 //!
@@ -45,7 +45,7 @@ pub const MATERIAL_SCALE: Real = 1.0;
 pub const CROSSING_FRACTION: Real = 0.5;
 
 /// Smallest height (relative to `h0`) at which the law is evaluated.
-pub const MIN_HEIGHT_RATIO: Real = 1e-3;
+pub const MIN_HEIGHT_RATIO: Real = 1e-6;
 
 /// The magnitude of the repulsion, `k (h0²/h − h)` (eq. 4 applied to the height).
 #[inline]

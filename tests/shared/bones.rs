@@ -1,0 +1,236 @@
+//! Nodes bound to rigid bodies (issue 3, acceptance 1, 2, 6).
+
+use crate::dim::math::{self, Pose, Real, Vector, DIM, UP};
+use crate::dim::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
+use crate::dim::scenes::LimbScene;
+use crate::dim::{AttachError, DeformableBuilder, DeformableWorld, ElementModel, Material};
+
+fn cuboid(half: Vector) -> ColliderBuilder {
+    ColliderBuilder::new(crate::dim::rapier::geometry::SharedShape::new(
+        crate::dim::rapier::geometry::Cuboid::new(half),
+    ))
+}
+
+fn tissue(
+    world: &mut DeformableWorld,
+    half: Vector,
+    res: usize,
+    at: Vector,
+) -> crate::dim::DeformableHandle {
+    let t = DeformableBuilder::cuboid(half, [res; DIM])
+        .model(ElementModel::EdgeRepulsion)
+        .material(Material {
+            density: 100.0,
+            young_modulus: 2e3,
+            damping_ratio: 0.1,
+            ..Default::default()
+        })
+        .translation(at)
+        .build()
+        .unwrap();
+    world.insert(t)
+}
+
+#[test]
+fn nodes_follow_a_moving_and_turning_kinematic_bone_exactly() {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    world.physics.gravity = Vector::ZERO;
+    let bone = world
+        .physics
+        .insert_body(RigidBodyBuilder::kinematic_position_based());
+    let collider = world
+        .physics
+        .insert_collider(cuboid(Vector::splat(0.3)), Some(bone));
+    let h = tissue(&mut world, Vector::splat(0.5), 5, Vector::ZERO);
+    let bound = world.attach_nodes_inside(h, collider, 1e-3).unwrap();
+    assert_eq!(
+        bound,
+        3usize.pow(DIM as u32),
+        "the bone binds the inner 3^DIM nodes"
+    );
+    let mut worst: Real = 0.0;
+    for k in 1..=180 {
+        let t = k as Real / 60.0;
+        let mut at = Vector::ZERO;
+        at[0] = 0.8 * t.sin();
+        at[1] = 0.3 * t;
+        let pose = Pose::from_parts(at, math::rotation_from_angle(math::planar_angle(1.5 * t)));
+        world.physics.bodies[bone].set_next_kinematic_position(pose);
+        world.step();
+        let body = &world.physics.bodies[bone];
+        let d = &world.deformables[h];
+        for a in d.attachments() {
+            worst = worst.max(
+                body.position()
+                    .transform_point(a.anchor)
+                    .distance(d.positions()[a.node as usize]),
+            );
+        }
+    }
+    assert!(
+        worst < 1e-4,
+        "a bound node strayed {worst} m from its anchor"
+    );
+    // The free tissue came along.
+    let bone_at = world.physics.bodies[bone].position().translation;
+    let com = world.deformables[h].center_of_mass();
+    assert!(
+        com.distance(bone_at) < 0.2,
+        "tissue left behind: centre {com:?}, bone {bone_at:?}"
+    );
+}
+
+#[test]
+fn a_moving_dynamic_body_drags_its_tissue_and_momentum_is_kept() {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 120.0);
+    world.physics.gravity = Vector::ZERO;
+    let mut v0 = Vector::ZERO;
+    v0[0] = 2.0;
+    let (body, collider) = world.physics.insert(
+        RigidBodyBuilder::dynamic().linvel(v0),
+        cuboid(Vector::splat(0.3)).density(100.0),
+    );
+    let h = tissue(&mut world, Vector::splat(0.5), 5, Vector::ZERO);
+    world.attach_nodes_inside(h, collider, 1e-3).unwrap();
+    let momentum = |w: &DeformableWorld| {
+        let b = &w.physics.bodies[body];
+        b.linvel() * b.mass() + w.deformables[h].linear_momentum()
+    };
+    let p0 = momentum(&world);
+    let mut worst: Real = 0.0;
+    for _ in 0..240 {
+        world.step();
+        worst = worst.max((momentum(&world) - p0).length());
+    }
+    assert!(
+        worst < 0.01 * p0.length(),
+        "momentum drifted by {worst} of {}",
+        p0.length()
+    );
+    let d = &world.deformables[h];
+    // The tissue moves with the body (its mass is ~4× the body's, so they share the speed).
+    let v = d.center_of_mass_velocity()[0];
+    let vb = world.physics.bodies[body].linvel()[0];
+    assert!(v > 0.2 && v < 2.0, "tissue velocity {v}");
+    assert!((vb - v).abs() < 0.1, "body {vb} and tissue {v} part ways");
+}
+
+#[test]
+fn tissue_hanging_from_one_end_swings_a_balanced_bar_down_on_that_side() {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 120.0);
+    let anchor = world.physics.insert_body(RigidBodyBuilder::fixed());
+    let mut half = Vector::splat(0.05);
+    half[0] = 1.0;
+    let (bar, _) = world
+        .physics
+        .insert(RigidBodyBuilder::dynamic(), cuboid(half).density(500.0));
+    world
+        .physics
+        .insert_impulse_joint(anchor, bar, crate::planar_revolute().build());
+    let mut at = -UP * 0.35;
+    at[0] = 0.8;
+    let h = tissue(&mut world, Vector::splat(0.2), 3, at);
+    // Bind the top face of the tissue to the bar.
+    let top: Vec<u32> = (0..world.deformables[h].num_nodes() as u32)
+        .filter(|&i| world.deformables[h].positions()[i as usize].dot(UP) > -0.16)
+        .collect();
+    assert!(!top.is_empty());
+    world.attach_nodes(h, bar, &top).unwrap();
+    for _ in 0..120 {
+        world.step();
+    }
+    let b = &world.physics.bodies[bar];
+    let tip = b.position().transform_point(Vector::X * 1.0);
+    assert!(
+        tip.dot(UP) < -0.05,
+        "the loaded end should swing down, it is at {}",
+        tip.dot(UP)
+    );
+    // Without the tissue the bar stays level.
+    let mut empty = DeformableWorld::new();
+    let anchor = empty.physics.insert_body(RigidBodyBuilder::fixed());
+    let (bar, _) = empty
+        .physics
+        .insert(RigidBodyBuilder::dynamic(), cuboid(half).density(500.0));
+    empty
+        .physics
+        .insert_impulse_joint(anchor, bar, crate::planar_revolute().build());
+    for _ in 0..120 {
+        empty.step();
+    }
+    let tip = empty.physics.bodies[bar]
+        .position()
+        .transform_point(Vector::X * 1.0);
+    assert!(tip.dot(UP).abs() < 1e-3);
+}
+
+#[test]
+fn bindings_are_checked_and_removed_bodies_are_detached() {
+    let mut world = DeformableWorld::new();
+    let (body, collider) = world
+        .physics
+        .insert(RigidBodyBuilder::dynamic(), cuboid(Vector::splat(0.2)));
+    let h = tissue(&mut world, Vector::splat(0.5), 3, Vector::ZERO);
+    let n = world.deformables[h].num_nodes() as u32;
+    assert_eq!(
+        world.attach_nodes(h, body, &[0, n]),
+        Err(AttachError::NodeOutOfRange {
+            node: n,
+            nodes: n as usize
+        })
+    );
+    assert!(
+        world.deformables[h].attachments().is_empty(),
+        "a failed call binds nothing"
+    );
+    let e = world.attach_nodes_inside(h, collider, -1.0).unwrap_err();
+    assert!(e.to_string().contains("tolerance"), "{e}");
+    assert_eq!(world.attach_nodes_inside(h, collider, 1e-3), Ok(1));
+    world.attach_nodes(h, body, &[0, 1]).unwrap();
+    assert_eq!(world.deformables[h].attachments().len(), 3);
+    // Re-binding a node replaces its binding.
+    world.attach_nodes(h, body, &[0]).unwrap();
+    assert_eq!(world.deformables[h].attachments().len(), 3);
+    assert_eq!(world.deformables[h].detach_nodes(&[0]), 1);
+    // Removing the body from rapier directly: the next step drops the bindings.
+    world.physics.remove_body(body);
+    let r = world.step().get(h).cloned().unwrap();
+    assert_eq!(r.detached, 2);
+    assert!(world.deformables[h].attachments().is_empty());
+    assert!(world.deformables[h]
+        .positions()
+        .iter()
+        .all(|p| p.is_finite()));
+    let stale = world.attach_nodes(h, body, &[0]).unwrap_err();
+    assert!(matches!(stale, AttachError::NoSuchBody(_)), "{stale}");
+}
+
+#[test]
+fn limb_springs_collapse_and_edge_repulsion_holds() {
+    let springs = LimbScene {
+        model: ElementModel::Springs,
+        stop_at_first_inversion: true,
+        ..Default::default()
+    }
+    .run()
+    .unwrap();
+    let angle = springs
+        .first_inversion_degrees
+        .expect("springs must invert an element before 110°");
+    assert!(angle < 110.0);
+    let er = LimbScene::default().run().unwrap();
+    assert_eq!(
+        er.first_inversion_degrees, None,
+        "ER inverted an element: {er:?}"
+    );
+    assert!((er.final_degrees - 110.0).abs() < 0.5);
+    assert!(!er.non_finite);
+    assert!(
+        er.max_anchor_error < 1e-4,
+        "bound nodes strayed {}",
+        er.max_anchor_error
+    );
+}
