@@ -3,9 +3,16 @@
 //!
 //! ```text
 //! cargo run --release --example fall_and_bounce [-- --res 5 --seconds 5 --dt 0.001]
+//! cargo run --release --features rerun --example fall_and_bounce [-- --rrd DIR | --connect [ADDR]]
 //! ```
+//!
+//! With the `rerun` feature every run is logged (every 10th step) to `out/fall_and_bounce/
+//! <dim>-<model>.rrd`, or to `--rrd DIR`, or streamed to a viewer with `--connect`.
 
 use std::env;
+
+#[path = "common/sink.rs"]
+mod sink;
 
 fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
     let args: Vec<String> = env::args().collect();
@@ -17,7 +24,7 @@ fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
 }
 
 macro_rules! run_dimension {
-    ($dim:ident, $label:expr) => {{
+    ($dim:ident, $label:expr, $sink:expr, $files:expr) => {{
         use sinew::$dim::scenes::FallScene;
         use sinew::$dim::ElementModel;
         let base = FallScene {
@@ -28,7 +35,38 @@ macro_rules! run_dimension {
         };
         for model in ElementModel::ALL {
             let scene = FallScene { model, ..base };
-            match scene.run() {
+            #[cfg(feature = "rerun")]
+            let mut recorder = {
+                use sinew::$dim::{RecorderOptions, RerunRecorder};
+                let options = RecorderOptions { every_n_steps: 10, ..Default::default() };
+                let made = match $sink {
+                    sink::Sink::Folder(dir) => {
+                        let file = dir.join(format!("{}-{}.rrd", $label.to_lowercase(), model.name()));
+                        $files.push(file.clone());
+                        RerunRecorder::save("sinew-fall-and-bounce", &file, options).map(Some)
+                    }
+                    sink::Sink::Connect(addr) => RerunRecorder::connect("sinew-fall-and-bounce", addr.as_deref(), options).map(Some),
+                    sink::Sink::Off => Ok(None),
+                };
+                made.unwrap_or_else(|e| {
+                    eprintln!("not logging: {e}");
+                    None
+                })
+            };
+            let outcome = scene.run_with(|_world, _handle| {
+                #[cfg(feature = "rerun")]
+                if let Some(r) = recorder.as_mut() {
+                    r.set_name(_handle, "jelly");
+                    if let Err(e) = r.log_world(_world) {
+                        eprintln!("logging failed: {e}");
+                    }
+                }
+            });
+            #[cfg(feature = "rerun")]
+            if let Some(r) = recorder.as_ref() {
+                r.flush();
+            }
+            match outcome {
                 Ok(o) => println!(
                     "{:<3} {:<18} nodes {:>5}  apex {:>6}  rest {:.3} m  max pen {:.2e} m  inverted max {:>3} end {:>3}  substeps {:>5.1}  wall/sim {:.3} s{}",
                     $label,
@@ -50,7 +88,15 @@ macro_rules! run_dimension {
 }
 
 fn main() {
+    let sink = sink::from_args("fall_and_bounce");
+    #[allow(unused_mut)]
+    let mut files: Vec<std::path::PathBuf> = Vec::new();
     println!("fall and bounce: 1 m, 1 kg, E = 1e4 Pa, damping ratio 0.1, bottom dropped from 2 m, 5 s (centre-of-mass heights in m)");
-    run_dimension!(dim3, "3D");
-    run_dimension!(dim2, "2D");
+    run_dimension!(dim3, "3D", &sink, files);
+    run_dimension!(dim2, "2D", &sink, files);
+    if cfg!(feature = "rerun") {
+        sink::print_how_to_view(&sink, &files);
+    } else {
+        sink::print_no_feature();
+    }
 }

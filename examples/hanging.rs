@@ -4,10 +4,16 @@
 //!
 //! ```text
 //! cargo run --release --example hanging
+//! cargo run --release --features rerun --example hanging [-- --rrd DIR | --connect [ADDR]]
 //! ```
+//!
+//! With the `rerun` feature each run is logged to `out/hanging/<dim>.rrd` (attachments shown).
+
+#[path = "common/sink.rs"]
+mod sink;
 
 macro_rules! run_dimension {
-    ($dim:ident, $label:expr, $joint:expr) => {{
+    ($dim:ident, $label:expr, $joint:expr, $sink:expr, $files:expr) => {{
         use sinew::$dim::math::{Real, Vector, DIM, UP};
         use sinew::$dim::rapier::geometry::{Cuboid, SharedShape};
         use sinew::$dim::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
@@ -37,8 +43,36 @@ macro_rules! run_dimension {
         world.attach_nodes(h, bar, &top).expect("bar exists");
         println!("{} bar 2 m, {:.1} kg; tissue {:.1} kg bound by {} nodes at x = 0.7 m", $label,
             world.physics.bodies[bar].mass(), world.deformables[h].total_mass(), top.len());
+        #[cfg(feature = "rerun")]
+        let mut recorder = {
+            use sinew::$dim::{RecorderOptions, RerunRecorder};
+            let options = RecorderOptions { every_n_steps: 2, ..Default::default() };
+            let made = match $sink {
+                sink::Sink::Folder(dir) => {
+                    let file = dir.join(format!("{}.rrd", $label.to_lowercase()));
+                    $files.push(file.clone());
+                    RerunRecorder::save("sinew-hanging", &file, options).map(Some)
+                }
+                sink::Sink::Connect(addr) => RerunRecorder::connect("sinew-hanging", addr.as_deref(), options).map(Some),
+                sink::Sink::Off => Ok(None),
+            };
+            made.unwrap_or_else(|e| {
+                eprintln!("not logging: {e}");
+                None
+            })
+        };
+        #[cfg(feature = "rerun")]
+        if let Some(r) = recorder.as_mut() {
+            r.set_name(h, "tissue");
+        }
         for k in 1..=480 {
             world.step();
+            #[cfg(feature = "rerun")]
+            if let Some(r) = recorder.as_mut() {
+                if let Err(e) = r.log_world(&world) {
+                    eprintln!("logging failed: {e}");
+                }
+            }
             if k % 60 == 0 {
                 let b = &world.physics.bodies[bar];
                 let tip = b.position().transform_point(Vector::X);
@@ -56,19 +90,35 @@ macro_rules! run_dimension {
                 );
             }
         }
+        #[cfg(feature = "rerun")]
+        if let Some(r) = recorder.as_ref() {
+            r.flush();
+        }
         let _: Real = 0.0;
     }};
 }
 
 fn main() {
+    let sink = sink::from_args("hanging");
+    #[allow(unused_mut)]
+    let mut files: Vec<std::path::PathBuf> = Vec::new();
     run_dimension!(
         dim2,
         "2D",
-        sinew::dim2::rapier::dynamics::RevoluteJointBuilder::new()
+        sinew::dim2::rapier::dynamics::RevoluteJointBuilder::new(),
+        &sink,
+        files
     );
     run_dimension!(
         dim3,
         "3D",
-        sinew::dim3::rapier::dynamics::RevoluteJointBuilder::new(sinew::dim3::math::Vector::Z)
+        sinew::dim3::rapier::dynamics::RevoluteJointBuilder::new(sinew::dim3::math::Vector::Z),
+        &sink,
+        files
     );
+    if cfg!(feature = "rerun") {
+        sink::print_how_to_view(&sink, &files);
+    } else {
+        sink::print_no_feature();
+    }
 }

@@ -4,9 +4,16 @@
 //!
 //! ```text
 //! cargo run --release --example limb [-- --spacing 0.1 --young 1e4]
+//! cargo run --release --features rerun --example limb [-- --rrd DIR | --connect [ADDR]]
 //! ```
+//!
+//! With the `rerun` feature every run is logged at every step (attachments included) to
+//! `out/limb/<dim>-<model>.rrd` and the logging cost per frame is printed beside the step cost.
 
 use std::env;
+
+#[path = "common/sink.rs"]
+mod sink;
 
 fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
     let args: Vec<String> = env::args().collect();
@@ -18,7 +25,7 @@ fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
 }
 
 macro_rules! run_dimension {
-    ($dim:ident, $label:expr) => {{
+    ($dim:ident, $label:expr, $sink:expr, $files:expr) => {{
         use sinew::$dim::scenes::LimbScene;
         use sinew::$dim::ElementModel;
         let base = LimbScene {
@@ -28,7 +35,47 @@ macro_rules! run_dimension {
         };
         for model in ElementModel::ALL {
             let scene = LimbScene { model, ..base };
-            match scene.run() {
+            #[cfg(feature = "rerun")]
+            let mut recorder = {
+                use sinew::$dim::{RecorderOptions, RerunRecorder};
+                let options = RecorderOptions { every_n_steps: 1, attachments: true, ..Default::default() };
+                let made = match $sink {
+                    sink::Sink::Folder(dir) => {
+                        let file = dir.join(format!("{}-{}.rrd", $label.to_lowercase(), model.name()));
+                        $files.push(file.clone());
+                        RerunRecorder::save("sinew-limb", &file, options).map(Some)
+                    }
+                    sink::Sink::Connect(addr) => RerunRecorder::connect("sinew-limb", addr.as_deref(), options).map(Some),
+                    sink::Sink::Off => Ok(None),
+                };
+                made.unwrap_or_else(|e| {
+                    eprintln!("not logging: {e}");
+                    None
+                })
+            };
+            let outcome = scene.run_with(|_world, _handle, _degrees| {
+                #[cfg(feature = "rerun")]
+                if let Some(r) = recorder.as_mut() {
+                    r.set_name(_handle, "tissue");
+                    if let Err(e) = r.log_world(_world) {
+                        eprintln!("logging failed: {e}");
+                    }
+                }
+            });
+            #[cfg(feature = "rerun")]
+            if let Some(r) = recorder.as_ref() {
+                r.flush();
+                if let Ok(o) = &outcome {
+                    let steps = (scene.max_degrees / scene.degrees_per_second / scene.dt).round();
+                    println!(
+                        "    logging: {:.3} ms per frame ({} frames) against {:.3} ms per simulated step",
+                        r.seconds_per_frame() * 1e3,
+                        r.frames(),
+                        o.wall_seconds * 1e3 / steps as f64
+                    );
+                }
+            }
+            match outcome {
                 Ok(o) => println!(
                     "{:<3} {:<18} nodes {:>5} cells {:>5} bound {:>4}  first inversion {:>8}  max inverted {:>4}  min volume ratio {:+.3}  anchor error {:.1e} m  wall {:.2} s{}",
                     $label,
@@ -50,7 +97,15 @@ macro_rules! run_dimension {
 }
 
 fn main() {
+    let sink = sink::from_args("limb");
+    #[allow(unused_mut)]
+    let mut files: Vec<std::path::PathBuf> = Vec::new();
     println!("limb: lower bone turned at 10°/s to 110°, tissue E = 1e4 Pa, 1000 kg/m³, no gravity");
-    run_dimension!(dim2, "2D");
-    run_dimension!(dim3, "3D");
+    run_dimension!(dim2, "2D", &sink, files);
+    run_dimension!(dim3, "3D", &sink, files);
+    if cfg!(feature = "rerun") {
+        sink::print_how_to_view(&sink, &files);
+    } else {
+        sink::print_no_feature();
+    }
 }

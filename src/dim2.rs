@@ -174,6 +174,202 @@ pub mod math {
     }
 }
 
+/// Rerun primitives for 2D (used by the shared recorder): a 2D view, with rapier's y up.
+#[cfg(feature = "rerun")]
+pub(crate) mod render {
+    use super::math::{Pose, Vector};
+    use rapier2d::geometry::Shape;
+    use rerun::{
+        Boxes2D, Color, Ellipses2D, LineStrips2D, Points2D, Quaternion, RecordingStream,
+        RecordingStreamResult, Transform3D,
+    };
+
+    /// Nothing to log: 2D views take their axes from the data (rapier's y up is drawn upwards
+    /// by flipping y in the positions logged; see `p`).
+    pub fn view_coordinates(_rec: &RecordingStream) -> RecordingStreamResult<()> {
+        Ok(())
+    }
+
+    // Rerun's 2D views draw y downwards (image convention): positions are logged as they are
+    // and documented so; users who want y up flip the view in the viewer.
+    fn p(v: Vector) -> [f32; 2] {
+        v.to_array()
+    }
+
+    /// The surface topology is carried by the strips themselves in 2D.
+    pub fn surface_topology(
+        _rec: &RecordingStream,
+        _path: &str,
+        _facets: &[[u32; 2]],
+    ) -> RecordingStreamResult<()> {
+        Ok(())
+    }
+
+    /// The surface of one frame: one two-point strip per boundary segment, coloured by the mean
+    /// of its two vertices' colours.
+    pub fn surface(
+        rec: &RecordingStream,
+        path: &str,
+        vertices: &[Vector],
+        facets: &[[u32; 2]],
+        colors: &[Color],
+    ) -> RecordingStreamResult<()> {
+        let strips = facets
+            .iter()
+            .map(|f| [p(vertices[f[0] as usize]), p(vertices[f[1] as usize])]);
+        let strip_colors = facets.iter().map(|f| {
+            let (a, b) = (
+                colors[f[0] as usize].to_array(),
+                colors[f[1] as usize].to_array(),
+            );
+            Color::from_unmultiplied_rgba(
+                ((a[0] as u16 + b[0] as u16) / 2) as u8,
+                ((a[1] as u16 + b[1] as u16) / 2) as u8,
+                ((a[2] as u16 + b[2] as u16) / 2) as u8,
+                255,
+            )
+        });
+        rec.log(
+            path,
+            &LineStrips2D::new(strips)
+                .with_colors(strip_colors)
+                .with_radii([0.01]),
+        )
+    }
+
+    /// Points.
+    pub fn points(
+        rec: &RecordingStream,
+        path: &str,
+        at: &[Vector],
+        colors: &[Color],
+        radius: f32,
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &Points2D::new(at.iter().map(|v| p(*v)))
+                .with_colors(colors.iter().copied())
+                .with_radii([radius]),
+        )
+    }
+
+    /// Line segments.
+    pub fn segments(
+        rec: &RecordingStream,
+        path: &str,
+        segments: &[[Vector; 2]],
+        color: Color,
+        radius: f32,
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &LineStrips2D::new(segments.iter().map(|s| [p(s[0]), p(s[1])]))
+                .with_colors([color])
+                .with_radii([radius]),
+        )
+    }
+
+    /// A rigid pose as a transform (rotation about the view's normal).
+    pub fn pose(rec: &RecordingStream, path: &str, pose: &Pose) -> RecordingStreamResult<()> {
+        let half = 0.5 * pose.rotation.angle();
+        let t = pose.translation;
+        rec.log(
+            path,
+            &Transform3D::from_translation_rotation(
+                [t.x, t.y, 0.0],
+                Quaternion::from_xyzw([0.0, 0.0, half.sin(), half.cos()]),
+            ),
+        )
+    }
+
+    /// A collider shape in its own frame, once. Returns false for a shape it cannot draw.
+    pub fn shape(
+        rec: &RecordingStream,
+        path: &str,
+        shape: &dyn Shape,
+        color: Color,
+    ) -> RecordingStreamResult<bool> {
+        if let Some(c) = shape.as_cuboid() {
+            rec.log_static(
+                path,
+                &Boxes2D::from_half_sizes([p(c.half_extents)]).with_colors([color]),
+            )?;
+        } else if let Some(b) = shape.as_ball() {
+            rec.log_static(
+                path,
+                &Ellipses2D::from_half_sizes([[b.radius, b.radius]]).with_colors([color]),
+            )?;
+        } else if let Some(c) = shape.as_capsule() {
+            // Outline: two sides and two half circles.
+            let (a, b, r) = (c.segment.a, c.segment.b, c.radius);
+            let axis = (b - a).normalize_or(Vector::X);
+            let side = axis.perp() * r;
+            let mut outline = vec![p(a + side), p(b + side)];
+            let base = side.to_angle();
+            for k in 1..16 {
+                let t = base - std::f32::consts::PI * k as f32 / 16.0;
+                outline.push(p(b + Vector::from_angle(t) * r));
+            }
+            outline.push(p(b - side));
+            outline.push(p(a - side));
+            for k in 1..16 {
+                let t = base + std::f32::consts::PI - std::f32::consts::PI * k as f32 / 16.0;
+                outline.push(p(a + Vector::from_angle(t) * r));
+            }
+            outline.push(p(a + side));
+            rec.log_static(path, &LineStrips2D::new([outline]).with_colors([color]))?;
+        } else if let Some(poly) = shape.as_convex_polygon() {
+            let mut loop_points: Vec<[f32; 2]> = poly.points().iter().map(|v| p(*v)).collect();
+            if let Some(first) = loop_points.first().copied() {
+                loop_points.push(first);
+            }
+            rec.log_static(path, &LineStrips2D::new([loop_points]).with_colors([color]))?;
+        } else if let Some(line) = shape.as_polyline() {
+            let v = line.vertices();
+            let strips = line
+                .indices()
+                .iter()
+                .map(|s| [p(v[s[0] as usize]), p(v[s[1] as usize])]);
+            rec.log_static(path, &LineStrips2D::new(strips).with_colors([color]))?;
+        } else if let Some(compound) = shape.as_compound() {
+            let mut all = true;
+            for (k, (local, sub)) in compound.shapes().iter().enumerate() {
+                let sub_path = format!("{path}/{k}");
+                let half = 0.5 * local.rotation.angle();
+                let t = local.translation;
+                rec.log_static(
+                    sub_path.as_str(),
+                    &Transform3D::from_translation_rotation(
+                        [t.x, t.y, 0.0],
+                        Quaternion::from_xyzw([0.0, 0.0, half.sin(), half.cos()]),
+                    ),
+                )?;
+                all &= self::shape(rec, &sub_path, sub.as_ref(), color)?;
+            }
+            return Ok(all);
+        } else {
+            return Ok(false);
+        }
+        Ok(true)
+    }
+
+    /// Arrows (contact normals).
+    pub fn arrows(
+        rec: &RecordingStream,
+        path: &str,
+        origins: &[Vector],
+        vectors: &[Vector],
+        color: Color,
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &rerun::Arrows2D::from_vectors(vectors.iter().map(|v| p(*v)))
+                .with_origins(origins.iter().map(|v| p(*v)))
+                .with_colors([color]),
+        )
+    }
+}
+
 #[path = "shared/mod.rs"]
 mod shared;
 pub use shared::*;

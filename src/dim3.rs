@@ -233,6 +233,177 @@ pub mod math {
     }
 }
 
+/// Rerun primitives for 3D (used by the shared recorder).
+#[cfg(feature = "rerun")]
+pub(crate) mod render {
+    use super::math::{Pose, Vector};
+    use rapier3d::geometry::Shape;
+    use rerun::{
+        Boxes3D, Capsules3D, Color, Ellipsoids3D, LineStrips3D, Mesh3D, Points3D, Quaternion,
+        RecordingStream, RecordingStreamResult, Transform3D, ViewCoordinates,
+    };
+
+    /// The world's axes: y up, right-handed (as rapier).
+    pub fn view_coordinates(rec: &RecordingStream) -> RecordingStreamResult<()> {
+        rec.log_static("world", &ViewCoordinates::RIGHT_HAND_Y_UP())
+    }
+
+    fn p(v: Vector) -> [f32; 3] {
+        v.to_array()
+    }
+
+    /// The surface topology, once: triangles over the surface vertices.
+    pub fn surface_topology(
+        rec: &RecordingStream,
+        path: &str,
+        facets: &[[u32; 3]],
+    ) -> RecordingStreamResult<()> {
+        rec.log_static(
+            path,
+            &Mesh3D::update_fields().with_triangle_indices(facets.iter().copied()),
+        )
+    }
+
+    /// The surface of one frame: vertex positions and colours.
+    pub fn surface(
+        rec: &RecordingStream,
+        path: &str,
+        vertices: &[Vector],
+        _facets: &[[u32; 3]],
+        colors: &[Color],
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &Mesh3D::update_fields()
+                .with_vertex_positions(vertices.iter().map(|v| p(*v)))
+                .with_vertex_colors(colors.iter().copied()),
+        )
+    }
+
+    /// Points.
+    pub fn points(
+        rec: &RecordingStream,
+        path: &str,
+        at: &[Vector],
+        colors: &[Color],
+        radius: f32,
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &Points3D::new(at.iter().map(|v| p(*v)))
+                .with_colors(colors.iter().copied())
+                .with_radii([radius]),
+        )
+    }
+
+    /// Line segments.
+    pub fn segments(
+        rec: &RecordingStream,
+        path: &str,
+        segments: &[[Vector; 2]],
+        color: Color,
+        radius: f32,
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &LineStrips3D::new(segments.iter().map(|s| [p(s[0]), p(s[1])]))
+                .with_colors([color])
+                .with_radii([radius]),
+        )
+    }
+
+    /// A rigid pose as a transform.
+    pub fn pose(rec: &RecordingStream, path: &str, pose: &Pose) -> RecordingStreamResult<()> {
+        let q = pose.rotation;
+        rec.log(
+            path,
+            &Transform3D::from_translation_rotation(
+                p(pose.translation),
+                Quaternion::from_xyzw([q.x, q.y, q.z, q.w]),
+            ),
+        )
+    }
+
+    /// A collider shape in its own frame, once. Returns false for a shape it cannot draw.
+    pub fn shape(
+        rec: &RecordingStream,
+        path: &str,
+        shape: &dyn Shape,
+        color: Color,
+    ) -> RecordingStreamResult<bool> {
+        if let Some(c) = shape.as_cuboid() {
+            rec.log_static(
+                path,
+                &Boxes3D::from_half_sizes([p(c.half_extents)]).with_colors([color]),
+            )?;
+        } else if let Some(b) = shape.as_ball() {
+            rec.log_static(
+                path,
+                &Ellipsoids3D::from_radii([b.radius]).with_colors([color]),
+            )?;
+        } else if let Some(c) = shape.as_capsule() {
+            rec.log_static(
+                path,
+                &Capsules3D::from_endpoints_and_radii(
+                    [p(c.segment.a)],
+                    [p(c.segment.b)],
+                    [c.radius],
+                )
+                .with_colors([color]),
+            )?;
+        } else if let Some(compound) = shape.as_compound() {
+            let mut all = true;
+            for (k, (local, sub)) in compound.shapes().iter().enumerate() {
+                let sub_path = format!("{path}/{k}");
+                let q = local.rotation;
+                rec.log_static(
+                    sub_path.as_str(),
+                    &Transform3D::from_translation_rotation(
+                        p(local.translation),
+                        Quaternion::from_xyzw([q.x, q.y, q.z, q.w]),
+                    ),
+                )?;
+                all &= self::shape(rec, &sub_path, sub.as_ref(), color)?;
+            }
+            return Ok(all);
+        } else {
+            let mesh = if let Some(c) = shape.as_convex_polyhedron() {
+                Some(c.to_trimesh())
+            } else if let Some(t) = shape.as_trimesh() {
+                Some((t.vertices().to_vec(), t.indices().to_vec()))
+            } else {
+                shape.as_heightfield().map(|h| h.to_trimesh())
+            };
+            let Some((vertices, indices)) = mesh else {
+                return Ok(false);
+            };
+            rec.log_static(
+                path,
+                &Mesh3D::new(vertices.iter().map(|v| p(*v)))
+                    .with_triangle_indices(indices)
+                    .with_albedo_factor(color.0),
+            )?;
+        }
+        Ok(true)
+    }
+
+    /// Arrows (contact normals).
+    pub fn arrows(
+        rec: &RecordingStream,
+        path: &str,
+        origins: &[Vector],
+        vectors: &[Vector],
+        color: Color,
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &rerun::Arrows3D::from_vectors(vectors.iter().map(|v| p(*v)))
+                .with_origins(origins.iter().map(|v| p(*v)))
+                .with_colors([color]),
+        )
+    }
+}
+
 #[path = "shared/mod.rs"]
 mod shared;
 pub use shared::*;

@@ -39,6 +39,8 @@ pub struct Deformable {
     pub(crate) attachments: Vec<super::attach::Attachment>,
     /// Per node: index into `attachments`, or `u32::MAX`.
     pub(crate) attachment_of: Vec<u32>,
+    /// Contacts of the last step (one per touching surface node, plus facet contacts).
+    pub(crate) contacts: Vec<ContactPoint>,
     /// Colliders touched during the last step, sorted.
     pub(crate) touching: Vec<super::rapier::geometry::ColliderHandle>,
     /// Free for the user.
@@ -169,6 +171,12 @@ impl Deformable {
         &self.acc.force
     }
 
+    /// The contacts of the last step: for each surface node that touched a collider, its last
+    /// contact, then each facet contact (a rigid feature pressing a surface facet).
+    pub fn contacts(&self) -> &[ContactPoint] {
+        &self.contacts
+    }
+
     /// The report of the last step.
     pub fn report(&self) -> &DeformableReport {
         &self.report
@@ -211,6 +219,19 @@ impl Deformable {
         self.forces_valid = false;
         Ok(())
     }
+}
+
+/// A contact between a deformable and a collider.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct ContactPoint {
+    /// Point on the collider's surface, world frame.
+    pub point: Vector,
+    /// The collider's outward normal there.
+    pub normal: Vector,
+    /// The collider.
+    pub collider: super::rapier::geometry::ColliderHandle,
+    /// The node, or `u32::MAX` for a facet contact.
+    pub node: u32,
 }
 
 fn check_state(values: &[Vector], expected: usize) -> Result<(), BuildError> {
@@ -483,6 +504,7 @@ impl DeformableBuilder {
             attachments: Vec::new(),
             attachment_of: vec![u32::MAX; n],
             touching: Vec::new(),
+            contacts: Vec::new(),
             positions,
             masses,
             inv_masses,

@@ -454,6 +454,7 @@ pub(crate) fn node_candidates(
 pub(crate) struct NodeContact {
     pub candidate: usize,
     pub point: Vector,
+    pub normal: Vector,
     pub impulse: Vector,
 }
 
@@ -579,6 +580,7 @@ pub(crate) fn resolve_node(
     Some(NodeContact {
         candidate: ci,
         point,
+        normal: n,
         impulse: (*v - v_old) * mass,
     })
 }

@@ -2,6 +2,8 @@
 // the dimension only through `super::math` and `super::rapier`; a per-dimension difference is
 // a function or a constant in `math`, never a `cfg`.
 
+#[cfg(feature = "rerun")]
+use super::render;
 use super::{math, rapier};
 
 mod attach;
@@ -13,12 +15,16 @@ mod material;
 pub mod mesh;
 pub mod model;
 mod pipeline;
+#[cfg(feature = "rerun")]
+#[path = "rerun.rs"]
+mod recorder;
 mod report;
 pub mod scenes;
 mod set;
 mod world;
 
 pub use attach::{AttachError, Attachment};
+pub use body::ContactPoint;
 pub use body::{Deformable, DeformableBuilder};
 pub use error::BuildError;
 pub use events::{ChannelEventCollector, DeformableContactEvent, DeformableEventHandler};
@@ -26,6 +32,8 @@ pub use material::{Material, Stiffness};
 pub use mesh::{CellKind, Mesh};
 pub use model::{ElementModel, RotationFit, ShapeDamping};
 pub use pipeline::{DeformablePipeline, PipelineSettings};
+#[cfg(feature = "rerun")]
+pub use recorder::{ColorField, RecorderError, RecorderOptions, RerunRecorder};
 pub use report::{DeformableReport, StepReport};
 pub use set::{DeformableHandle, DeformableSet};
 pub use world::DeformableWorld;

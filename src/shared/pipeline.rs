@@ -20,7 +20,7 @@
 
 use std::time::Instant;
 
-use super::body::Deformable;
+use super::body::{ContactPoint, Deformable};
 use super::contact::{self, BodyMotion, Candidate, MotionKind};
 use super::events::{DeformableContactEvent, DeformableEventHandler};
 use super::math::{self, Real, Vector, FACET_ARITY};
@@ -80,6 +80,7 @@ struct Scratch {
     surface_slot: Vec<u32>,
     touched_nodes: Vec<bool>,
     touched_colliders: Vec<bool>,
+    last_contact: Vec<Option<ContactPoint>>,
     targets: Vec<Vector>,
 }
 
@@ -400,6 +401,9 @@ impl DeformablePipeline {
         }
         sc.touched_nodes.clear();
         sc.touched_nodes.resize(surface.len(), false);
+        sc.last_contact.clear();
+        sc.last_contact.resize(surface.len(), None);
+        body.contacts.clear();
         let mut time_contacts = t0.elapsed().as_secs_f64();
 
         let mut t = 0.0;
@@ -534,6 +538,12 @@ impl DeformablePipeline {
                         body.positions[i] = x;
                         body.velocities[i] = v;
                         sc.touched_nodes[k] = true;
+                        sc.last_contact[k] = Some(ContactPoint {
+                            point: c.point,
+                            normal: c.normal,
+                            collider: candidates[c.candidate].handle,
+                            node: i as u32,
+                        });
                         sc.touched_colliders[c.candidate] = true;
                         let cand = &candidates[c.candidate];
                         if cand.dynamic {
@@ -574,6 +584,12 @@ impl DeformablePipeline {
                             gained += dv * body.masses[i] * if im[a] > 0.0 { 1.0 } else { 0.0 };
                         }
                         facet_contacts += 1;
+                        body.contacts.push(ContactPoint {
+                            point: fc.point,
+                            normal: -fc.normal,
+                            collider: candidates[fc.candidate].handle,
+                            node: u32::MAX,
+                        });
                         sc.touched_colliders[fc.candidate] = true;
                         let cand = &candidates[fc.candidate];
                         if cand.dynamic {
@@ -601,6 +617,8 @@ impl DeformablePipeline {
         }
 
         let ti = Instant::now();
+        let node_contacts: Vec<ContactPoint> = sc.last_contact.iter().flatten().copied().collect();
+        body.contacts.splice(0..0, node_contacts);
         // Non-finite, or so far out that it can only be a blow-up (|x| or |v| above 1e8).
         let sane = |v: &Vector| v.is_finite() && v.abs().max_element() < 1e8;
         let finite = body.positions.iter().all(sane) && body.velocities.iter().all(sane);

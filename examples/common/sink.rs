@@ -1,0 +1,70 @@
+//! Where the examples send their Rerun logs, from the command line:
+//! `--rrd PATH` (a folder for several runs, else a file), `--connect [ADDR]` (a running viewer,
+//! default address if none), `--no-log`. Default: save under `out/<example>/`.
+
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// The chosen sink.
+#[derive(Clone, Debug)]
+pub enum Sink {
+    /// Save `.rrd` files in this folder.
+    Folder(PathBuf),
+    /// Stream to a viewer.
+    Connect(Option<String>),
+    /// Log nothing.
+    Off,
+}
+
+/// Reads the sink from the arguments.
+pub fn from_args(example: &str) -> Sink {
+    let args: Vec<String> = std::env::args().collect();
+    if args.iter().any(|a| a == "--no-log") {
+        return Sink::Off;
+    }
+    if let Some(i) = args.iter().position(|a| a == "--connect") {
+        let addr = args.get(i + 1).filter(|a| !a.starts_with("--")).cloned();
+        return Sink::Connect(addr);
+    }
+    if let Some(path) = args
+        .iter()
+        .position(|a| a == "--rrd")
+        .and_then(|i| args.get(i + 1))
+    {
+        return Sink::Folder(PathBuf::from(path));
+    }
+    Sink::Folder(PathBuf::from("out").join(example))
+}
+
+/// Prints how to look at what was saved.
+pub fn print_how_to_view(sink: &Sink, files: &[PathBuf]) {
+    match sink {
+        Sink::Folder(dir) if !files.is_empty() => {
+            println!(
+                "\nwrote {} Rerun recording(s) to {}/; view them with:",
+                files.len(),
+                dir.display()
+            );
+            println!(
+                "  rerun {}",
+                files
+                    .iter()
+                    .map(|f| f.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            );
+            println!("(the viewer: pip install rerun-sdk==0.36.3)");
+        }
+        Sink::Connect(addr) => println!(
+            "\nstreamed to the viewer at {}",
+            addr.as_deref().unwrap_or("the default address")
+        ),
+        _ => {}
+    }
+}
+
+/// Prints that logging is compiled out.
+pub fn print_no_feature() {
+    println!("\n(built without `--features rerun`: nothing logged; add it to record .rrd files)");
+}
