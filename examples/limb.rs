@@ -62,20 +62,7 @@ macro_rules! run_dimension {
                     }
                 }
             });
-            #[cfg(feature = "rerun")]
-            if let Some(r) = recorder.as_ref() {
-                r.flush();
-                if let Ok(o) = &outcome {
-                    let steps = (scene.max_degrees / scene.degrees_per_second / scene.dt).round();
-                    println!(
-                        "    logging: {:.3} ms per frame ({} frames) against {:.3} ms per simulated step",
-                        r.seconds_per_frame() * 1e3,
-                        r.frames(),
-                        o.wall_seconds * 1e3 / steps as f64
-                    );
-                }
-            }
-            match outcome {
+            match &outcome {
                 Ok(o) => println!(
                     "{:<3} {:<18} nodes {:>5} cells {:>5} bound {:>4}  first inversion {:>8}  max inverted {:>4}  min volume ratio {:+.3}  anchor error {:.1e} m  wall {:.2} s{}",
                     $label,
@@ -91,6 +78,19 @@ macro_rules! run_dimension {
                     if o.non_finite { "  NON-FINITE" } else { "" }
                 ),
                 Err(e) => println!("{:<3} {:<18} failed to build: {e}", $label, model.name()),
+            }
+            #[cfg(feature = "rerun")]
+            if let Some(r) = recorder.as_ref() {
+                r.flush();
+                if let Ok(o) = &outcome {
+                    let steps = (scene.max_degrees / scene.degrees_per_second / scene.dt).round();
+                    println!(
+                        "    logging: {:.3} ms per frame ({} frames) against {:.3} ms per simulated step",
+                        r.seconds_per_frame() * 1e3,
+                        r.frames(),
+                        o.wall_seconds * 1e3 / steps as f64
+                    );
+                }
             }
         }
     }};
