@@ -9,28 +9,17 @@
 //! With the `rerun` feature every run is logged (every 10th step) to `out/fall_and_bounce/
 //! <dim>-<model>.rrd`, or to `--rrd DIR`, or streamed to a viewer with `--connect`.
 
-use std::env;
-
 #[path = "common/sink.rs"]
 mod sink;
-
-fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
-    let args: Vec<String> = env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
 
 macro_rules! run_dimension {
     ($dim:ident, $label:expr, $sink:expr, $files:expr) => {{
         use sinew::$dim::scenes::FallScene;
         use sinew::$dim::ElementModel;
         let base = FallScene {
-            resolution: arg("--res", 5),
-            seconds: arg("--seconds", 5.0),
-            dt: arg("--dt", 1e-3),
+            resolution: sink::arg("--res", 5),
+            seconds: sink::arg("--seconds", 5.0),
+            dt: sink::arg("--dt", 1e-3),
             ..FallScene::default()
         };
         for model in ElementModel::ALL {

@@ -10,27 +10,16 @@
 //! With the `rerun` feature every run is logged at every step (attachments included) to
 //! `out/limb/<dim>-<model>.rrd` and the logging cost per frame is printed beside the step cost.
 
-use std::env;
-
 #[path = "common/sink.rs"]
 mod sink;
-
-fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
-    let args: Vec<String> = env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
 
 macro_rules! run_dimension {
     ($dim:ident, $label:expr, $sink:expr, $files:expr) => {{
         use sinew::$dim::scenes::LimbScene;
         use sinew::$dim::ElementModel;
         let base = LimbScene {
-            spacing: arg("--spacing", 0.1),
-            young_modulus: arg("--young", 1e4),
+            spacing: sink::arg("--spacing", 0.1),
+            young_modulus: sink::arg("--young", 1e4),
             ..LimbScene::default()
         };
         for model in ElementModel::ALL {

@@ -1,4 +1,4 @@
-//! Where the examples send their Rerun logs, from the command line:
+//! Command-line helpers shared by the examples. Where the examples send their Rerun logs:
 //! `--rrd PATH` (a folder for several runs, else a file), `--connect [ADDR]` (a running viewer,
 //! default address if none), `--no-log`. Default: save under `out/<example>/`.
 
@@ -67,4 +67,14 @@ pub fn print_how_to_view(sink: &Sink, files: &[PathBuf]) {
 /// Prints that logging is compiled out.
 pub fn print_no_feature() {
     println!("\n(built without `--features rerun`: nothing logged; add it to record .rrd files)");
+}
+
+/// The value after `name` on the command line, parsed, or `default`.
+pub fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
 }
