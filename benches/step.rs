@@ -17,16 +17,17 @@ macro_rules! bench_dimension {
         for res in $resolutions {
             for model in ElementModel::ALL {
                 let scene = FallScene {
-                    model,
+                    subject: model.into(),
                     resolution: res,
                     ..FallScene::default()
                 };
-                let (mut world, h) = scene.world().expect("scene builds");
+                let sim = scene.sim().expect("scene builds");
+                let elements = sim.mesh().num_cells() as u64;
+                let mut world = sim.world;
                 // Let it land first so contacts are part of the step.
                 for _ in 0..700 {
                     world.step();
                 }
-                let elements = world.deformables[h].mesh().num_cells() as u64;
                 group.throughput(Throughput::Elements(elements));
                 group.bench_with_input(BenchmarkId::new(model.name(), res), &res, |b, _| {
                     b.iter(|| world.step().wall_time)

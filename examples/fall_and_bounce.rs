@@ -23,7 +23,7 @@ macro_rules! run_dimension {
             ..FallScene::default()
         };
         for model in ElementModel::ALL {
-            let scene = FallScene { model, ..base };
+            let scene = FallScene { subject: model.into(), ..base };
             #[cfg(feature = "rerun")]
             let mut recorder = {
                 use sinew::$dim::{RecorderOptions, RerunRecorder};
@@ -42,10 +42,12 @@ macro_rules! run_dimension {
                     None
                 })
             };
-            let outcome = scene.run_with(|_world, _handle| {
+            let outcome = scene.run_with(|_world, _done| {
                 #[cfg(feature = "rerun")]
                 if let Some(r) = recorder.as_mut() {
-                    r.set_name(_handle, "jelly");
+                    for (h, _) in _world.deformables.iter() {
+                        r.set_name(h, "jelly");
+                    }
                     if let Err(e) = r.log_world(_world) {
                         eprintln!("logging failed: {e}");
                     }
@@ -62,13 +64,13 @@ macro_rules! run_dimension {
                     model.name(),
                     o.nodes,
                     o.bounce_apex_com.map_or("none".to_string(), |a| format!("{a:.3}")),
-                    o.rest_com,
-                    o.max_penetration,
+                    o.rest_com.unwrap_or(f64::NAN),
+                    o.max_penetration.unwrap_or(f64::NAN),
                     o.max_inverted_elements,
                     o.final_inverted_elements,
-                    o.mean_substeps,
-                    o.wall_per_sim_second(),
-                    if o.non_finite { "  NON-FINITE" } else { "" }
+                    o.substeps,
+                    o.wall_per_sim_s(),
+                    if o.nan || o.exploded { "  BLEW UP" } else { "" }
                 ),
                 Err(e) => println!("{:<3} {:<18} failed to build: {e}", $label, model.name()),
             }

@@ -23,7 +23,7 @@ macro_rules! run_dimension {
             ..LimbScene::default()
         };
         for model in ElementModel::ALL {
-            let scene = LimbScene { model, ..base };
+            let scene = LimbScene { subject: model.into(), ..base };
             #[cfg(feature = "rerun")]
             let mut recorder = {
                 use sinew::$dim::{RecorderOptions, RerunRecorder};
@@ -42,10 +42,12 @@ macro_rules! run_dimension {
                     None
                 })
             };
-            let outcome = scene.run_with(|_world, _handle, _degrees| {
+            let outcome = scene.run_with(|_world, _done| {
                 #[cfg(feature = "rerun")]
                 if let Some(r) = recorder.as_mut() {
-                    r.set_name(_handle, "tissue");
+                    for (h, _) in _world.deformables.iter() {
+                        r.set_name(h, "tissue");
+                    }
                     if let Err(e) = r.log_world(_world) {
                         eprintln!("logging failed: {e}");
                     }
@@ -53,18 +55,17 @@ macro_rules! run_dimension {
             });
             match &outcome {
                 Ok(o) => println!(
-                    "{:<3} {:<18} nodes {:>5} cells {:>5} bound {:>4}  first inversion {:>8}  max inverted {:>4}  min volume ratio {:+.3}  anchor error {:.1e} m  wall {:.2} s{}",
+                    "{:<3} {:<18} nodes {:>5} cells {:>5}  first inversion {:>8}  max inverted {:>4}  min volume ratio {:+.3}  anchor error {:.1e} m  wall {:.2} s{}",
                     $label,
                     model.name(),
                     o.nodes,
                     o.elements,
-                    o.attached_nodes,
-                    o.first_inversion_degrees.map_or("none".to_string(), |a| format!("{a:.1}°")),
+                    o.first_failure.map_or("none".to_string(), |a| format!("{a:.1}°")),
                     o.max_inverted_elements,
-                    o.min_volume_ratio,
-                    o.max_anchor_error,
-                    o.wall_seconds,
-                    if o.non_finite { "  NON-FINITE" } else { "" }
+                    o.min_vol_ratio,
+                    o.max_anchor_error.unwrap_or(0.0),
+                    o.wall_s,
+                    if o.nan || o.exploded { "  BLEW UP" } else { "" }
                 ),
                 Err(e) => println!("{:<3} {:<18} failed to build: {e}", $label, model.name()),
             }
@@ -77,7 +78,7 @@ macro_rules! run_dimension {
                         "    logging: {:.3} ms per frame ({} frames) against {:.3} ms per simulated step",
                         r.seconds_per_frame() * 1e3,
                         r.frames(),
-                        o.wall_seconds * 1e3 / steps as f64
+                        o.wall_s * 1e3 / steps as f64
                     );
                 }
             }

@@ -46,6 +46,7 @@
 pub mod dim2;
 #[cfg(feature = "dim3")]
 pub mod dim3;
+pub mod record;
 
 // The README's example is compiled and run as a doctest.
 #[cfg(all(doctest, feature = "dim3"))]

@@ -54,8 +54,10 @@ macro_rules! fall_to_rrd {
             let rrd = dir.join(format!("fall-{}.rrd", $label));
             let expected = dir.join(format!("fall-{}.json", $label));
             let _ = std::fs::remove_file(&rrd);
-            let scene = FallScene { model: ElementModel::EdgeRepulsion, resolution: 3, seconds: 0.9, ..FallScene::default() };
-            let (mut world, h) = scene.world().unwrap();
+            let scene = FallScene { subject: ElementModel::EdgeRepulsion.into(), resolution: 3, seconds: 0.9, ..FallScene::default() };
+            let sim = scene.sim().unwrap();
+            let h = sim.handle().unwrap();
+            let mut world = sim.world;
             let options = RecorderOptions { every_n_steps: 50, nodes: true, contacts: true, ..Default::default() };
             let mut recorder = RerunRecorder::save("sinew-test", &rrd, options).unwrap();
             recorder.set_name(h, "jelly");

@@ -171,6 +171,13 @@ impl Deformable {
         &self.acc.force
     }
 
+    /// The element forces the last substep used, evaluated at the positions that substep
+    /// started from (zero before the first step); without gravity or contacts. Unlike
+    /// [`Deformable::element_forces`] this changes nothing.
+    pub fn last_element_forces(&self) -> &[Vector] {
+        &self.acc.force
+    }
+
     /// The contacts of the last step: for each surface node that touched a collider, its last
     /// contact, then each facet contact (a rigid feature pressing a surface facet).
     pub fn contacts(&self) -> &[ContactPoint] {

@@ -1,0 +1,512 @@
+//! The scene runner's command line: parses the arguments, runs the scenes for each dimension
+//! and model, prints a table or JSON lines. `tests/scenes.rs` calls [`run`] directly, so the
+//! test and the example go through the same code.
+
+use std::ffi::OsString;
+use std::io::Write;
+use std::time::{Duration, Instant};
+
+use clap::{Parser, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::{json, Value};
+use sinew::record::Record;
+
+/// The scenes.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Scene {
+    /// A soft cube dropped on the ground.
+    Fall,
+    /// Cooper & Maddock's limb, bent to 110°.
+    Limb,
+    /// A heavy box crushing a soft cube, then lifted away.
+    Crush,
+    /// A kinematic paddle striking a soft cube again and again.
+    Manipulator,
+    /// The fall at dt = 0.5 … 16.7 ms, one substep per step, then each solver's own substeps.
+    DtSweep,
+    /// The shape-based element's spurious angular acceleration (shape paper, Table 1).
+    RotationError,
+}
+
+/// Runs the paper's scenes with sinew's models and rapier's soft bodies.
+#[derive(Debug, Parser)]
+#[command(name = "scenes", about, long_about = None)]
+pub struct Args {
+    /// The scene.
+    #[arg(value_enum)]
+    pub scene: Scene,
+    /// Dimensions to run (default: 3 then 2).
+    #[arg(long, num_args = 1.., value_parser = clap::value_parser!(u8).range(2..=3))]
+    pub dim: Vec<u8>,
+    /// Models (default: all): springs, centroid-springs, nonlinear-springs, edge-repulsion,
+    /// shape-matching, rapier-volume, rapier-corotational, rapier-neo-hookean (and
+    /// rapier-fem-* with the `fem` feature); `sinew` or `rapier` for each family.
+    #[arg(long, num_args = 1..)]
+    pub model: Vec<String>,
+    /// Rotation fits of shape-matching: 1, 2, 3 or polar (default: 2).
+    #[arg(long, num_args = 1..)]
+    pub iterations: Vec<String>,
+    /// Nodes per edge of the cube (limb: nodes along the limb).
+    #[arg(long)]
+    pub res: Option<usize>,
+    /// Step length, s.
+    #[arg(long)]
+    pub dt: Option<f64>,
+    /// Simulated time, s (crush, manipulator: the whole timeline is scaled to it).
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// Young's modulus, Pa.
+    #[arg(long)]
+    pub young: Option<f64>,
+    /// Poisson's ratio.
+    #[arg(long)]
+    pub poisson: Option<f64>,
+    /// Crushing masses, kg (default: 1 10 100 1000).
+    #[arg(long, num_args = 1..)]
+    pub mass: Vec<f64>,
+    /// Strikes of the manipulator (default 20).
+    #[arg(long)]
+    pub strikes: Option<usize>,
+    /// k/m of the rotation-error element, 1/s² (default: 1e4 1e5 1e6).
+    #[arg(long, num_args = 1..)]
+    pub k_over_m: Vec<f64>,
+    /// Log every run to a Rerun file in this folder (needs `--features rerun`).
+    #[arg(long)]
+    pub rrd: Option<std::path::PathBuf>,
+    /// One JSON object per line per run instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Parses `args` (the first is the program name), runs, and writes the output to `out`.
+pub fn run<I, T>(args: I, out: &mut dyn Write) -> Result<Vec<Record>, String>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let args = Args::try_parse_from(args).map_err(|e| e.to_string())?;
+    if args.rrd.is_some() && !cfg!(feature = "rerun") {
+        return Err("--rrd needs the rerun feature: cargo run --release --features rerun --example scenes -- ...".into());
+    }
+    let dims = if args.dim.is_empty() {
+        vec![3, 2]
+    } else {
+        args.dim.clone()
+    };
+    let mut records = Vec::new();
+    let mut header = false;
+    for dim in dims {
+        let mut emit = |r: Record| -> Result<(), String> {
+            let line = if args.json {
+                to_json(&r).to_string()
+            } else {
+                let mut s = String::new();
+                if !header {
+                    s.push_str(&table_header(args.scene));
+                    s.push('\n');
+                    header = true;
+                }
+                s.push_str(&table_row(args.scene, &r));
+                s
+            };
+            writeln!(out, "{line}").map_err(|e| e.to_string())?;
+            records.push(r);
+            Ok(())
+        };
+        match dim {
+            2 => dim2::run(&args, &mut emit)?,
+            _ => dim3::run(&args, &mut emit)?,
+        }
+    }
+    Ok(records)
+}
+
+/// A progress bar on stderr that shows itself only once a run has lasted a second.
+pub struct Progress {
+    bar: ProgressBar,
+    start: Instant,
+    shown: bool,
+}
+
+impl Progress {
+    /// A hidden bar for the run called `label`.
+    pub fn new(label: String) -> Progress {
+        let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
+        bar.set_style(
+            ProgressStyle::with_template("{msg:40} [{bar:30}] {percent:>3}% {elapsed}/{eta}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar.set_message(label);
+        Progress {
+            bar,
+            start: Instant::now(),
+            shown: false,
+        }
+    }
+
+    /// Fraction `done` of the run is done.
+    pub fn update(&mut self, done: f64) {
+        if !self.shown && self.start.elapsed() > Duration::from_secs(1) {
+            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+            self.shown = true;
+        }
+        self.bar
+            .set_position((done.clamp(0.0, 1.0) * 1000.0) as u64);
+    }
+}
+
+impl Drop for Progress {
+    fn drop(&mut self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+/// The record as a JSON object: every key always present, `null` where it does not apply.
+pub fn to_json(r: &Record) -> Value {
+    let spurious = r.spurious;
+    json!({
+        "scene": r.scene,
+        "dim": r.dim,
+        "model": r.model,
+        "iterations": r.iterations,
+        "res": r.res,
+        "nodes": r.nodes,
+        "elements": r.elements,
+        "dt": r.dt,
+        "substep_mode": r.substep_mode,
+        "substeps": r.substeps,
+        "sim_s": r.sim_s,
+        "wall_s": r.wall_s,
+        "wall_per_sim_s": r.wall_per_sim_s(),
+        "mass": r.mass,
+        "young": r.young,
+        "poisson": r.poisson,
+        "k_over_m": r.k_over_m,
+        "bounce_apex_com": r.bounce_apex_com,
+        "rest_com": r.rest_com,
+        "max_penetration": r.max_penetration,
+        "min_vol_ratio": r.min_vol_ratio,
+        "max_inverted_elements": r.max_inverted_elements,
+        "final_inverted_elements": r.final_inverted_elements,
+        "failed": r.failed,
+        "first_failure": r.first_failure,
+        "shape_error": r.shape_error,
+        "spurious_mean": spurious.map(|s| s.mean),
+        "spurious_std": spurious.map(|s| s.std),
+        "spurious_max": spurious.map(|s| s.max),
+        "max_anchor_error": r.max_anchor_error,
+        "final_kinetic_energy": r.final_kinetic_energy,
+        "nan": r.nan,
+        "exploded": r.exploded,
+    })
+}
+
+fn opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or("—".to_string(), |v| format!("{v:.digits$}"))
+}
+
+fn table_header(scene: Scene) -> String {
+    let extra = match scene {
+        Scene::Fall => "  apex m  rest m   pen mm",
+        Scene::Limb => " failure°  anchor m",
+        Scene::Crush => "    mass kg  pen mm  shape err  failure kg",
+        Scene::Manipulator => "  rest m  shape err  failure strike",
+        Scene::DtSweep => "  mode   dt ms  apex m  rest m   pen mm  failure ms",
+        Scene::RotationError => "  k/m      dt ms  mean rad/s²  std rad/s²  max rad/s²",
+    };
+    format!(
+        "dim {:<23} {:>5} {:>6} {:>6} {:>9} {:>9} {:>9} {:>7}{extra}  flags",
+        "model", "iter", "nodes", "cells", "substeps", "wall/sim", "min vol", "inv max/end"
+    )
+}
+
+fn table_row(scene: Scene, r: &Record) -> String {
+    let extra = match scene {
+        Scene::Fall => format!(
+            "  {:>6}  {:>6}  {:>7}",
+            opt(r.bounce_apex_com, 3),
+            opt(r.rest_com, 3),
+            opt(r.max_penetration.map(|p| p * 1e3), 2)
+        ),
+        Scene::Limb => format!(
+            " {:>9}  {:>8}",
+            opt(r.first_failure, 1),
+            r.max_anchor_error
+                .map_or("—".to_string(), |e| format!("{e:.1e}"))
+        ),
+        Scene::Crush => format!(
+            "  {:>9}  {:>6}  {:>9}  {:>10}",
+            opt(r.mass, 0),
+            opt(r.max_penetration.map(|p| p * 1e3), 2),
+            opt(r.shape_error.map(|s| s * 100.0), 2) + "%",
+            opt(r.first_failure, 0)
+        ),
+        Scene::Manipulator => format!(
+            "  {:>6}  {:>9}  {:>14}",
+            opt(r.rest_com, 3),
+            opt(r.shape_error.map(|s| s * 100.0), 2) + "%",
+            opt(r.first_failure, 0)
+        ),
+        Scene::DtSweep => format!(
+            "  {:<5} {:>6}  {:>6}  {:>6}  {:>7}  {:>10}",
+            r.substep_mode,
+            format!("{:.1}", r.dt * 1e3),
+            opt(r.bounce_apex_com, 3),
+            opt(r.rest_com, 3),
+            opt(r.max_penetration.map(|p| p * 1e3), 2),
+            opt(r.first_failure, 1)
+        ),
+        Scene::RotationError => {
+            let s = r.spurious.unwrap_or_default();
+            format!(
+                "  {:<7.0e}  {:>6.3}  {:>11.3e}  {:>10.3e}  {:>10.3e}",
+                r.k_over_m.unwrap_or(0.0),
+                r.dt * 1e3,
+                s.mean,
+                s.std,
+                s.max
+            )
+        }
+    };
+    let mut flags = Vec::new();
+    if r.failed {
+        flags.push("FAILED");
+    }
+    if r.nan {
+        flags.push("NAN");
+    }
+    if r.exploded {
+        flags.push("EXPLODED");
+    }
+    format!(
+        "{}D  {:<23} {:>5} {:>6} {:>6} {:>9.1} {:>9.3} {:>+9.3} {:>7}{extra}  {}",
+        r.dim,
+        r.model,
+        r.iterations.clone().unwrap_or_default(),
+        r.nodes,
+        r.elements,
+        r.substeps,
+        r.wall_per_sim_s(),
+        r.min_vol_ratio,
+        format!("{}/{}", r.max_inverted_elements, r.final_inverted_elements),
+        flags.join(" ")
+    )
+}
+
+/// The runner for one dimension, written once and compiled for each.
+macro_rules! dimension_runner {
+    ($module:ident, $dim:ident) => {
+        mod $module {
+            use super::{Args, Progress, Scene};
+            use sinew::record::Record;
+            use sinew::$dim::math::Real;
+            use sinew::$dim::scenes::{
+                dt_sweep, CrushScene, FallScene, LimbScene, ManipulatorScene, RapierModel,
+                RotationErrorScene, Subject, CRUSH_MASSES,
+            };
+            use sinew::$dim::{DeformableWorld, ElementModel, RotationFit};
+
+            fn fits(args: &Args) -> Result<Vec<RotationFit>, String> {
+                if args.iterations.is_empty() {
+                    return Ok(vec![RotationFit::Iterative(2)]);
+                }
+                args.iterations
+                    .iter()
+                    .map(|s| match s.as_str() {
+                        "polar" => Ok(RotationFit::Polar),
+                        n => match n.parse::<usize>() {
+                            Ok(k @ 1..=3) => Ok(RotationFit::Iterative(k)),
+                            _ => Err(format!("--iterations takes 1, 2, 3 or polar, not {n}")),
+                        },
+                    })
+                    .collect()
+            }
+
+            fn subjects(args: &Args) -> Result<Vec<Subject>, String> {
+                let fits = fits(args)?;
+                let names: Vec<String> = if args.model.is_empty() {
+                    vec!["sinew".into(), "rapier".into()]
+                } else {
+                    args.model.clone()
+                };
+                let mut out = Vec::new();
+                for name in &names {
+                    let expanded: Vec<&str> = match name.as_str() {
+                        "sinew" => ElementModel::ALL.iter().map(|m| m.name()).collect(),
+                        "rapier" => RapierModel::ALL.iter().map(|m| m.name()).collect(),
+                        n => vec![n],
+                    };
+                    for n in expanded {
+                        let per_fit: Vec<RotationFit> = if n == "shape-matching" {
+                            fits.clone()
+                        } else {
+                            vec![RotationFit::Iterative(2)]
+                        };
+                        for fit in per_fit {
+                            let s = Subject::parse(n, fit).ok_or_else(|| {
+                                let all: Vec<&str> =
+                                    Subject::all().iter().map(|s| s.name()).collect();
+                                format!("unknown model {n}; the models are {}", all.join(", "))
+                            })?;
+                            out.push(s);
+                        }
+                    }
+                }
+                Ok(out)
+            }
+
+            fn cube(args: &Args, subject: Subject) -> FallScene {
+                let d = FallScene::default();
+                FallScene {
+                    subject,
+                    resolution: args.res.unwrap_or(d.resolution),
+                    dt: args.dt.map_or(d.dt, |v| v as Real),
+                    seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                    young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
+                    poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                    ..d
+                }
+            }
+
+            /// Runs `f` with an observer that drives a progress bar and the Rerun log.
+            fn observed<T>(
+                args: &Args,
+                label: String,
+                f: impl FnOnce(&mut dyn FnMut(&DeformableWorld, f64)) -> T,
+            ) -> T {
+                let mut progress = Progress::new(label.clone());
+                #[cfg(feature = "rerun")]
+                let mut recorder = args.rrd.as_ref().and_then(|dir| {
+                    use sinew::$dim::{RecorderOptions, RerunRecorder};
+                    let file = dir.join(format!("{}.rrd", label.replace([' ', '/'], "-")));
+                    let options = RecorderOptions {
+                        every_n_steps: 10,
+                        ..Default::default()
+                    };
+                    RerunRecorder::save("sinew-scenes", &file, options)
+                        .map_err(|e| eprintln!("not logging {label}: {e}"))
+                        .ok()
+                });
+                #[cfg(not(feature = "rerun"))]
+                let _ = args;
+                let result = f(&mut |_world: &DeformableWorld, done: f64| {
+                    progress.update(done);
+                    #[cfg(feature = "rerun")]
+                    if let Some(r) = recorder.as_mut() {
+                        if let Err(e) = r.log_world(_world) {
+                            eprintln!("logging failed: {e}");
+                        }
+                    }
+                });
+                #[cfg(feature = "rerun")]
+                if let Some(r) = recorder.as_ref() {
+                    r.flush();
+                }
+                result
+            }
+
+            pub fn run(
+                args: &Args,
+                emit: &mut dyn FnMut(Record) -> Result<(), String>,
+            ) -> Result<(), String> {
+                let dim = sinew::$dim::math::DIM;
+                let label = |scene: &str, s: &Subject| {
+                    let fit = s.iterations().map_or(String::new(), |i| format!(" {i}"));
+                    format!("{scene} {dim}D {}{fit}", s.name())
+                };
+                let err = |e: sinew::$dim::BuildError| e.to_string();
+                if args.scene == Scene::RotationError {
+                    let ks = if args.k_over_m.is_empty() {
+                        vec![1e4, 1e5, 1e6]
+                    } else {
+                        args.k_over_m.clone()
+                    };
+                    for k in ks {
+                        for row in RotationErrorScene::table_rows(k as Real) {
+                            let row = RotationErrorScene {
+                                seconds: args.seconds.map_or(row.seconds, |s| s as Real),
+                                ..row
+                            };
+                            let name = format!("rotation-error {dim}D k/m {k:e} {:?}", row.fit);
+                            let r = observed(args, name, |o| row.run_with(o)).map_err(err)?;
+                            emit(r)?;
+                        }
+                    }
+                    return Ok(());
+                }
+                for subject in subjects(args)? {
+                    let cube = cube(args, subject);
+                    let name = label(&format!("{:?}", args.scene).to_lowercase(), &subject);
+                    let records: Vec<Record> = match args.scene {
+                        Scene::Fall => {
+                            vec![observed(args, name, |o| cube.run_with(o)).map_err(err)?]
+                        }
+                        Scene::DtSweep => {
+                            observed(args, name, |o| dt_sweep(&cube, o)).map_err(err)?
+                        }
+                        Scene::Limb => {
+                            let d = LimbScene::default();
+                            let scene = LimbScene {
+                                subject,
+                                spacing: args
+                                    .res
+                                    .map_or(d.spacing, |n| 2.0 / (n.max(2) - 1) as Real),
+                                dt: args.dt.map_or(d.dt, |v| v as Real),
+                                max_degrees: args
+                                    .seconds
+                                    .map_or(d.max_degrees, |s| s as Real * d.degrees_per_second),
+                                young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
+                                poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                                ..d
+                            };
+                            vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
+                        }
+                        Scene::Crush => {
+                            let d = CrushScene::default();
+                            let scale = args.seconds.map_or(1.0, |s| {
+                                s as Real / (d.settle + d.hold + d.lift + d.recover)
+                            });
+                            let scene = CrushScene {
+                                cube,
+                                settle: d.settle * scale,
+                                ramp: d.ramp * scale,
+                                hold: d.hold * scale,
+                                lift: d.lift * scale,
+                                recover: d.recover * scale,
+                                ..d
+                            };
+                            let masses: Vec<Real> = if args.mass.is_empty() {
+                                CRUSH_MASSES.to_vec()
+                            } else {
+                                args.mass.iter().map(|&m| m as Real).collect()
+                            };
+                            observed(args, name, |o| scene.run_masses(&masses, o)).map_err(err)?
+                        }
+                        Scene::Manipulator => {
+                            let d = ManipulatorScene::default();
+                            let strikes = args.strikes.unwrap_or(d.strikes).max(1);
+                            let natural = d.settle + strikes as Real * d.period;
+                            let scale = args.seconds.map_or(1.0, |s| s as Real / natural);
+                            let scene = ManipulatorScene {
+                                cube,
+                                strikes,
+                                period: d.period * scale,
+                                settle: d.settle * scale,
+                                ..d
+                            };
+                            vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
+                        }
+                        Scene::RotationError => unreachable!("handled above"),
+                    };
+                    for r in records {
+                        emit(r)?;
+                    }
+                }
+                Ok(())
+            }
+        }
+    };
+}
+
+dimension_runner!(dim2, dim2);
+dimension_runner!(dim3, dim3);

@@ -1,0 +1,114 @@
+//! One run of a scene as a flat row, the same type in 2D and 3D: what the scene runner
+//! (`examples/scenes`) prints as a table or as one JSON object per line.
+//!
+//! Values are `f64` whatever the simulation's precision; a quantity a scene does not measure
+//! is `None` (JSON `null`).
+
+/// Mean, standard deviation and largest value of a sampled quantity.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct Spread {
+    /// Mean.
+    pub mean: f64,
+    /// Population standard deviation.
+    pub std: f64,
+    /// Largest sample.
+    pub max: f64,
+}
+
+impl Spread {
+    /// The spread of `samples` (all zero when empty).
+    pub fn of(samples: &[f64]) -> Spread {
+        if samples.is_empty() {
+            return Spread::default();
+        }
+        let n = samples.len() as f64;
+        let mean = samples.iter().sum::<f64>() / n;
+        let var = samples.iter().map(|s| (s - mean) * (s - mean)).sum::<f64>() / n;
+        let max = samples.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Spread {
+            mean,
+            std: var.sqrt(),
+            max,
+        }
+    }
+}
+
+/// What one run of one scene with one model measured.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Record {
+    /// Scene name (`fall`, `limb`, `crush`, `manipulator`, `dt-sweep`, `rotation-error`).
+    pub scene: String,
+    /// 2 or 3.
+    pub dim: usize,
+    /// Model name: one of sinew's (`springs`, …, `shape-matching`) or rapier's (`rapier-…`).
+    pub model: String,
+    /// Rotation fit of the shape-based model (`1`, `2`, `3` iterations or `polar`).
+    pub iterations: Option<String>,
+    /// Nodes per edge of the lattice.
+    pub res: usize,
+    /// Nodes (particles) of the body.
+    pub nodes: usize,
+    /// Cells of the body.
+    pub elements: usize,
+    /// Step length, s.
+    pub dt: f64,
+    /// `auto` (each solver's own choice) or `fixed` (a fixed count, see `substeps`).
+    pub substep_mode: String,
+    /// Mean substeps per step (rapier: its solver substeps).
+    pub substeps: f64,
+    /// Simulated time, s.
+    pub sim_s: f64,
+    /// Wall time of the stepping loop only, s.
+    pub wall_s: f64,
+    /// Load on the body: the crushing box's mass (crush), kg.
+    pub mass: Option<f64>,
+    /// Young's modulus, Pa.
+    pub young: f64,
+    /// Poisson's ratio (used by rapier's elastic models; sinew's spring-like models ignore it).
+    pub poisson: f64,
+    /// Stiffness per unit mass `k/m` of the rotation-error element, 1/s².
+    pub k_over_m: Option<f64>,
+    /// Highest centre of mass height after the first impact's lowest point, m.
+    pub bounce_apex_com: Option<f64>,
+    /// Centre of mass height at the end, m.
+    pub rest_com: Option<f64>,
+    /// Deepest node below the ground's top over the run, m.
+    pub max_penetration: Option<f64>,
+    /// Smallest signed cell volume over its rest volume, over the run.
+    pub min_vol_ratio: f64,
+    /// Most inverted (or collapsed) cells at any step.
+    pub max_inverted_elements: usize,
+    /// Inverted (or collapsed) cells at the end.
+    pub final_inverted_elements: usize,
+    /// Whether this run failed by the scene's criterion (see the scene's docs).
+    pub failed: bool,
+    /// The scene's failure point (see the scene's docs): an angle, a mass, a strike number, a
+    /// step length in ms.
+    pub first_failure: Option<f64>,
+    /// Largest node distance from the rest shape after removing rigid motion, over the body
+    /// size.
+    pub shape_error: Option<f64>,
+    /// Largest distance of a pinned node from its anchor on its bone, m (limb).
+    pub max_anchor_error: Option<f64>,
+    /// Spurious angular acceleration of the element forces, rad/s² (rotation-error).
+    pub spurious: Option<Spread>,
+    /// Kinetic energy at the end, J.
+    pub final_kinetic_energy: f64,
+    /// Whether the state turned non-finite.
+    pub nan: bool,
+    /// Whether the state blew up: non-finite, a node farther than [`EXPLODED_DISTANCE`] from
+    /// the origin or faster than [`EXPLODED_SPEED`].
+    pub exploded: bool,
+}
+
+/// A node farther than this from the origin (m) means the run exploded.
+pub const EXPLODED_DISTANCE: f64 = 100.0;
+/// A node faster than this (m/s) means the run exploded.
+pub const EXPLODED_SPEED: f64 = 100.0;
+
+impl Record {
+    /// Wall seconds per simulated second.
+    pub fn wall_per_sim_s(&self) -> f64 {
+        self.wall_s / self.sim_s.max(f64::MIN_POSITIVE)
+    }
+}

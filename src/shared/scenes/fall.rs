@@ -1,0 +1,214 @@
+//! The `fall` scene and the `dt-sweep` built on it.
+
+use super::super::error::BuildError;
+use super::super::material::Material;
+use super::super::math::{Real, Vector, DIM, UP};
+use super::super::mesh::{CellKind, Mesh};
+use super::super::model::ElementModel;
+use super::super::rapier::dynamics::RigidBodyBuilder;
+use super::super::rapier::geometry::{ColliderBuilder, Cuboid, SharedShape};
+use super::super::world::DeformableWorld;
+use super::sim::{BodySpec, Sim};
+use super::subject::Subject;
+use super::Record;
+
+/// A soft box (cube in 3D, square in 2D) dropped on a fixed ground whose top is at height 0.
+///
+/// Measures the bounce apex (highest centre of mass between the first impact's lowest point
+/// and the next turn downwards), the rest height at the end, the deepest node below the
+/// ground, inverted cells. A run fails when it explodes, ends with an inverted cell or sinks
+/// deeper than a quarter of the box into the ground.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct FallScene {
+    /// What is simulated.
+    pub subject: Subject,
+    /// Nodes per edge.
+    pub resolution: usize,
+    /// Cell kind of the lattice (rapier's models need simplices).
+    pub cells: CellKind,
+    /// Edge length of the box, m.
+    pub size: Real,
+    /// Mass of the box, kg (sets the density).
+    pub mass: Real,
+    /// Young's modulus, Pa.
+    pub young_modulus: Real,
+    /// Poisson's ratio (rapier's elastic models).
+    pub poisson_ratio: Real,
+    /// Damping ratio.
+    pub damping_ratio: Real,
+    /// Height of the box's bottom at the start, m.
+    pub drop_height: Real,
+    /// Friction coefficient of both the box and the ground.
+    pub friction: Real,
+    /// Restitution coefficient of both the box and the ground.
+    pub restitution: Real,
+    /// Step length, s.
+    pub dt: Real,
+    /// Simulated duration, s.
+    pub seconds: Real,
+    /// A fixed substep count instead of each solver's own choice.
+    pub fixed_substeps: Option<usize>,
+}
+
+impl Default for FallScene {
+    /// The `fall` scene: 1 m, 1 kg, E = 10⁴ Pa, ν = 0.3, bottom at 2 m (centre of mass at
+    /// 2.5 m), damping ratio 0.1, friction 0.5, restitution 0.5, dt 1 ms, 3 s, 5 nodes per
+    /// edge, simplex cells, edge-repulsion.
+    fn default() -> Self {
+        FallScene {
+            subject: Subject::Sinew(ElementModel::EdgeRepulsion),
+            resolution: 5,
+            cells: CellKind::Simplex,
+            size: 1.0,
+            mass: 1.0,
+            young_modulus: 1.0e4,
+            poisson_ratio: 0.3,
+            damping_ratio: 0.1,
+            drop_height: 2.0,
+            friction: 0.5,
+            restitution: 0.5,
+            dt: 1.0e-3,
+            seconds: 3.0,
+            fixed_substeps: None,
+        }
+    }
+}
+
+/// A fixed ground, top at height 0, 40 m wide.
+pub(crate) fn ground(world: &mut DeformableWorld, friction: Real, restitution: Real) {
+    let mut half = Vector::splat(20.0);
+    half[1] = 0.5;
+    world.physics.insert(
+        RigidBodyBuilder::fixed().translation(-UP * 0.5),
+        ColliderBuilder::new(cuboid(half))
+            .friction(friction)
+            .restitution(restitution),
+    );
+}
+
+pub(crate) fn cuboid(half: Vector) -> SharedShape {
+    SharedShape::new(Cuboid::new(half))
+}
+
+impl FallScene {
+    /// The material of the box.
+    pub fn material(&self) -> Material {
+        Material {
+            density: self.mass / self.size.powi(DIM as i32),
+            young_modulus: self.young_modulus,
+            damping_ratio: self.damping_ratio,
+            poisson_ratio: self.poisson_ratio,
+        }
+    }
+
+    /// The world: a fixed ground (top at height 0) and the box above it.
+    pub fn sim(&self) -> Result<Sim, BuildError> {
+        let mut world = DeformableWorld::new();
+        world.set_dt(self.dt);
+        ground(&mut world, self.friction, self.restitution);
+        let mesh = Mesh::cuboid(
+            Vector::splat(0.5 * self.size),
+            [self.resolution; DIM],
+            self.cells,
+        )?;
+        let mut spec = BodySpec::new(
+            mesh,
+            UP * (self.drop_height + 0.5 * self.size),
+            self.material(),
+        );
+        spec.friction = self.friction;
+        spec.restitution = self.restitution;
+        Sim::new(world, self.subject, spec, self.size, self.fixed_substeps)
+    }
+
+    /// Runs the scene, calling `observe` after every step with the world and the fraction done.
+    pub fn run_with(
+        &self,
+        mut observe: impl FnMut(&DeformableWorld, f64),
+    ) -> Result<Record, BuildError> {
+        let mut sim = self.sim()?;
+        let steps = (self.seconds / self.dt).round().max(1.0) as usize;
+        let mut max_penetration: Real = 0.0;
+        // Phases of the first bounce: falling, rising after the first impact's lowest point,
+        // done at the next turn downwards.
+        let (mut rising, mut apex): (bool, Option<Real>) = (false, None);
+        let mut highest = Real::NEG_INFINITY;
+        for k in 0..steps {
+            sim.step();
+            max_penetration = max_penetration.max(-sim.lowest());
+            let com = sim.center_of_mass().dot(UP);
+            let vy = sim.center_of_mass_velocity().dot(UP);
+            if apex.is_none() {
+                if !rising && vy > 0.0 && sim.lowest() < 0.05 * self.size {
+                    rising = true;
+                }
+                if rising {
+                    highest = highest.max(com);
+                    if vy <= 0.0 {
+                        apex = Some(highest);
+                    }
+                }
+            }
+            observe(&sim.world, (k + 1) as f64 / steps as f64);
+            if sim.exploded() {
+                break;
+            }
+        }
+        let mut r = sim.record("fall", self.resolution);
+        r.bounce_apex_com = apex.map(|a| a as f64);
+        r.rest_com = Some(sim.center_of_mass().dot(UP) as f64);
+        r.max_penetration = Some(max_penetration as f64);
+        r.failed =
+            r.exploded || r.final_inverted_elements > 0 || max_penetration > 0.25 * self.size;
+        Ok(r)
+    }
+
+    /// Runs the scene.
+    pub fn run(&self) -> Result<Record, BuildError> {
+        self.run_with(|_, _| {})
+    }
+}
+
+/// The step lengths of the dt sweep, ms.
+pub const DT_SWEEP_MS: [Real; 5] = [0.5, 1.0, 2.0, 5.0, 16.7];
+
+/// The `dt-sweep` scene: `scene` at each of [`DT_SWEEP_MS`] with one substep per step (the
+/// records say `substep_mode: fixed`), then with each solver's own substeps (`auto`). Within a
+/// mode every record's `first_failure` is the smallest dt (ms) whose run failed (see
+/// [`FallScene`]); larger ones are not assumed to fail and are run too.
+pub fn dt_sweep(
+    scene: &FallScene,
+    mut observe: impl FnMut(&DeformableWorld, f64),
+) -> Result<Vec<Record>, BuildError> {
+    let mut out = Vec::new();
+    let runs = 2 * DT_SWEEP_MS.len();
+    for (m, fixed) in [Some(1), None].into_iter().enumerate() {
+        let mut mode = Vec::new();
+        for (i, ms) in DT_SWEEP_MS.iter().enumerate() {
+            let index = m * DT_SWEEP_MS.len() + i;
+            let s = FallScene {
+                dt: ms * 1e-3,
+                fixed_substeps: fixed,
+                ..*scene
+            };
+            let mut r = s.run_with(|w, done| observe(w, (index as f64 + done) / runs as f64))?;
+            r.scene = "dt-sweep".to_string();
+            mode.push(r);
+        }
+        set_first_failure(&mut mode, |r| r.dt * 1e3);
+        out.extend(mode);
+    }
+    Ok(out)
+}
+
+/// Sets every record's `first_failure` to the smallest `key` of a failed record.
+pub(crate) fn set_first_failure(records: &mut [Record], key: impl Fn(&Record) -> f64) {
+    let first = records
+        .iter()
+        .filter(|r| r.failed)
+        .map(&key)
+        .fold(None, |a: Option<f64>, k| Some(a.map_or(k, |a| a.min(k))));
+    for r in records {
+        r.first_failure = first;
+    }
+}

@@ -1,0 +1,34 @@
+//! Ready-made scenes from `DESIGN.md` §6, shared by the examples, the tests and the benches so
+//! that they all measure the same thing — and run rapier's own soft bodies through the very
+//! same scenes, on the same mesh and material, as peers ([`Subject::Rapier`]).
+//!
+//! Every scene returns [`Record`]s (one row per run). What a scene measures is computed from
+//! node positions alone, in the same way for every subject: a cell is inverted when its signed
+//! volume is ≤ 0, penetration is the depth of the lowest node below the ground's top, the
+//! shape error is the largest node distance from the rest shape moved by the best rigid fit.
+//!
+//! | scene | what fails | `first_failure` |
+//! |---|---|---|
+//! | [`FallScene`] | nothing should | — |
+//! | [`LimbScene`] | an element inverts as the joint bends | bone angle, degrees |
+//! | [`CrushScene`] | an element inverts or the box reaches the ground | the smallest such mass, kg |
+//! | [`ManipulatorScene`] | an element stays inverted after a strike | strike number |
+//! | [`dt_sweep`] | the fall explodes, leaves an element inverted or sinks | the smallest such dt, ms |
+//! | [`RotationErrorScene`] | (accuracy) spurious angular acceleration of the rotation fit | — |
+
+mod crush;
+mod fall;
+mod limb;
+mod manipulator;
+mod rotation_error;
+mod sim;
+mod subject;
+
+pub use crate::record::{Record, Spread};
+pub use crush::{CrushScene, CRUSH_MASSES};
+pub use fall::{dt_sweep, FallScene, DT_SWEEP_MS};
+pub use limb::LimbScene;
+pub use manipulator::ManipulatorScene;
+pub use rotation_error::{spurious_acceleration, RotationErrorScene};
+pub use sim::{Sim, RAPIER_SKIN};
+pub use subject::{RapierModel, Subject};

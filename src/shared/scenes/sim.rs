@@ -1,0 +1,475 @@
+//! One soft body — sinew's or rapier's — in a [`DeformableWorld`], stepped and measured the
+//! same way whichever it is.
+
+use std::time::Instant;
+
+use super::super::attach::AttachError;
+use super::super::body::DeformableBuilder;
+use super::super::error::BuildError;
+use super::super::material::{Material, Stiffness};
+use super::super::math::{self, Real, Vector, DIM, SIMPLEX_ARITY, UP};
+use super::super::mesh::{CellKind, Mesh};
+use super::super::rapier::dynamics::{RigidBodyHandle, SoftBodyBuilder, SoftBodyHandle};
+use super::super::rapier::geometry::ColliderBuilder;
+use super::super::set::DeformableHandle;
+use super::super::world::DeformableWorld;
+use super::subject::{mean_edge, Subject};
+use crate::record::{Record, EXPLODED_DISTANCE, EXPLODED_SPEED};
+
+/// The contact skin of rapier's soft bodies (its default `particle_radius`): their nodes rest
+/// this far above what they lie on. Scenes that start a body at rest start it this high.
+pub const RAPIER_SKIN: Real = 0.01;
+
+/// Which body a [`Sim`] steps.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Soft {
+    Sinew(DeformableHandle),
+    Rapier(SoftBodyHandle),
+}
+
+/// A node of a rapier soft body pinned to a rigid body at a point of the body's frame.
+#[derive(Copy, Clone, Debug)]
+struct Pin {
+    node: u32,
+    body: RigidBodyHandle,
+    local: Vector,
+}
+
+/// The soft body a scene drops into its world.
+#[derive(Clone, Debug)]
+pub(crate) struct BodySpec {
+    /// Rest mesh, in body coordinates.
+    pub mesh: Mesh,
+    /// Where the mesh's origin goes.
+    pub translation: Vector,
+    pub material: Material,
+    /// sinew only: how stiffness follows from the material.
+    pub stiffness: Stiffness,
+    pub friction: Real,
+    pub restitution: Real,
+    /// Nodes bound to rigid bodies at their initial positions.
+    pub pins: Vec<(RigidBodyHandle, Vec<u32>)>,
+}
+
+impl BodySpec {
+    pub fn new(mesh: Mesh, translation: Vector, material: Material) -> Self {
+        BodySpec {
+            mesh,
+            translation,
+            material,
+            stiffness: Stiffness::FromMaterial,
+            friction: 0.5,
+            restitution: 0.5,
+            pins: Vec::new(),
+        }
+    }
+}
+
+/// A world holding one soft body of a given [`Subject`], with what the scenes measure on it.
+///
+/// Everything measured comes from node positions and velocities read back after each step,
+/// so sinew's and rapier's bodies are judged alike.
+pub struct Sim {
+    /// The world: rigid bodies, colliders, and the soft body (in `deformables` for sinew, in
+    /// `physics.soft_bodies` for rapier).
+    pub world: DeformableWorld,
+    subject: Subject,
+    soft: Soft,
+    pins: Vec<Pin>,
+    mesh: Mesh,
+    masses: Vec<Real>,
+    rest: Vec<Vector>,
+    x: Vec<Vector>,
+    v: Vec<Vector>,
+    size: Real,
+    material: Material,
+    fixed_substeps: Option<usize>,
+    steps: usize,
+    substeps: usize,
+    wall: f64,
+    inverted: usize,
+    max_inverted: usize,
+    min_ratio: Real,
+    step_min_ratio: Real,
+    nan: bool,
+    exploded: bool,
+}
+
+fn cell_kind_error(kind: CellKind) -> BuildError {
+    BuildError::UnsupportedCells {
+        model: "rapier soft body",
+        kind: kind.name(),
+    }
+}
+
+impl Sim {
+    /// Puts the body of `spec` in `world` as `subject`. `size` is the body's size for relative
+    /// measures; `fixed_substeps` replaces each solver's own substep choice.
+    pub(crate) fn new(
+        mut world: DeformableWorld,
+        subject: Subject,
+        spec: BodySpec,
+        size: Real,
+        fixed_substeps: Option<usize>,
+    ) -> Result<Sim, BuildError> {
+        let mesh = spec.mesh;
+        let n = mesh.nodes().len();
+        let arity = mesh.kind().arity() as Real;
+        let mut masses = vec![0.0; n];
+        for (cell, ids) in mesh.cells().enumerate() {
+            let m = spec.material.density * mesh.rest_volumes()[cell] / arity;
+            for &i in ids {
+                masses[i as usize] += m;
+            }
+        }
+        let rest: Vec<Vector> = mesh.nodes().iter().map(|p| *p + spec.translation).collect();
+        let mut pins = Vec::new();
+        for (body, nodes) in &spec.pins {
+            let pose = *world
+                .physics
+                .bodies
+                .get(*body)
+                .ok_or_else(|| attach_error(&AttachError::NoSuchBody(*body)))?
+                .position();
+            for &node in nodes {
+                let p = rest
+                    .get(node as usize)
+                    .copied()
+                    .ok_or_else(|| attach_error(&AttachError::NodeOutOfRange { node, nodes: n }))?;
+                pins.push(Pin {
+                    node,
+                    body: *body,
+                    local: pose.inverse_transform_point(p),
+                });
+            }
+        }
+        let soft = match subject {
+            Subject::Sinew(model) => {
+                world.pipeline.settings.fixed_substeps = fixed_substeps;
+                let body = DeformableBuilder::new(mesh.clone())
+                    .model(model)
+                    .material(spec.material)
+                    .stiffness(spec.stiffness)
+                    .friction(spec.friction)
+                    .restitution(spec.restitution)
+                    .translation(spec.translation)
+                    .build()?;
+                let h = world.insert(body);
+                for (body, nodes) in &spec.pins {
+                    world
+                        .attach_nodes(h, *body, nodes)
+                        .map_err(|e| attach_error(&e))?;
+                }
+                Soft::Sinew(h)
+            }
+            Subject::Rapier(model) => {
+                if mesh.kind() != CellKind::Simplex {
+                    return Err(cell_kind_error(mesh.kind()));
+                }
+                if let Some(k) = fixed_substeps {
+                    let params = &mut world.physics.integration_parameters;
+                    params.num_solver_iterations = k.max(1);
+                    // rapier adds up to this many substeps on its own under fast motion.
+                    params.soft_bodies.max_extra_substeps = 0;
+                }
+                let cells: Vec<[u32; SIMPLEX_ARITY]> = mesh
+                    .cells()
+                    .map(|c| std::array::from_fn(|i| c[i]))
+                    .collect();
+                let edges: Vec<[u32; 2]> = mesh.vertex_pairs().iter().map(|(e, _)| *e).collect();
+                let pinned: Vec<u32> = pins.iter().map(|p| p.node).collect();
+                #[allow(unused_mut)]
+                let mut builder = SoftBodyBuilder::new(rest.clone())
+                    .cells(cells)
+                    .masses(masses.clone())
+                    .material(model.material(&spec.material, mean_edge(&rest, &edges)))
+                    .cell_model(model.cell_model())
+                    .surface_collider(
+                        ColliderBuilder::ball(0.0)
+                            .friction(spec.friction)
+                            .restitution(spec.restitution),
+                    )
+                    .particle_radius(RAPIER_SKIN)
+                    .pinned_particles(pinned)
+                    .can_sleep(false);
+                #[cfg(feature = "fem")]
+                {
+                    builder = builder.solver(model.solver());
+                }
+                Soft::Rapier(world.physics.insert_soft_body(builder))
+            }
+        };
+        let mut sim = Sim {
+            world,
+            subject,
+            soft,
+            pins,
+            mesh,
+            masses,
+            x: rest.clone(),
+            v: vec![Vector::ZERO; n],
+            rest,
+            size,
+            material: spec.material,
+            fixed_substeps,
+            steps: 0,
+            substeps: 0,
+            wall: 0.0,
+            inverted: 0,
+            max_inverted: 0,
+            min_ratio: 1.0,
+            step_min_ratio: 1.0,
+            nan: false,
+            exploded: false,
+        };
+        sim.read_back();
+        Ok(sim)
+    }
+
+    /// One step of the world; returns the wall time it took, s.
+    pub fn step(&mut self) -> f64 {
+        // rapier's pinned particles are kinematic: move them to where their bone will be.
+        if let Soft::Rapier(h) = self.soft {
+            let w = &mut self.world.physics;
+            if let Some(sb) = w.soft_bodies.get_mut(h) {
+                for pin in &self.pins {
+                    if let Some(b) = w.bodies.get(pin.body) {
+                        let target = b.next_position().transform_point(pin.local);
+                        sb.set_particle_kinematic_target(pin.node as usize, target);
+                    }
+                }
+            }
+        }
+        let t0 = Instant::now();
+        let report = self.world.step();
+        let wall = t0.elapsed().as_secs_f64();
+        self.wall += wall;
+        self.steps += 1;
+        match self.soft {
+            Soft::Sinew(h) => {
+                let r = report.get(h).cloned().unwrap_or_default();
+                self.substeps += r.substeps;
+                self.nan |= r.non_finite;
+            }
+            Soft::Rapier(_) => {
+                self.substeps += self
+                    .world
+                    .physics
+                    .integration_parameters
+                    .num_solver_iterations;
+            }
+        }
+        self.read_back();
+        wall
+    }
+
+    fn read_back(&mut self) {
+        match self.soft {
+            Soft::Sinew(h) => {
+                if let Some(d) = self.world.deformables.get(h) {
+                    self.x.copy_from_slice(d.positions());
+                    self.v.copy_from_slice(d.velocities());
+                }
+            }
+            Soft::Rapier(h) => {
+                if let Some(sb) = self.world.physics.soft_bodies.get(h) {
+                    for (i, p) in sb.particles().iter().enumerate().take(self.x.len()) {
+                        self.x[i] = p.position();
+                        self.v[i] = p.velocity();
+                    }
+                }
+            }
+        }
+        let finite = self.x.iter().chain(&self.v).all(|p| p.is_finite());
+        self.nan |= !finite;
+        let far = self.x.iter().any(|p| p.length() as f64 > EXPLODED_DISTANCE)
+            || self.v.iter().any(|v| v.length() as f64 > EXPLODED_SPEED);
+        self.exploded |= !finite || far;
+        let (mut inverted, mut min_ratio) = (0, Real::INFINITY);
+        for c in 0..self.mesh.num_cells() {
+            let q = self.mesh.cell_quality(c, &self.x);
+            if q.is_nan() || q <= 0.0 {
+                inverted += 1;
+            }
+            min_ratio = min_ratio.min(q);
+        }
+        self.inverted = inverted;
+        self.step_min_ratio = min_ratio;
+        self.max_inverted = self.max_inverted.max(inverted);
+        self.min_ratio = self.min_ratio.min(min_ratio);
+    }
+
+    /// sinew's body, when the subject is one of sinew's models.
+    pub fn deformable(&self) -> Option<&super::super::body::Deformable> {
+        match self.soft {
+            Soft::Sinew(h) => self.world.deformables.get(h),
+            Soft::Rapier(_) => None,
+        }
+    }
+
+    /// sinew's handle of the body, when the subject is one of sinew's models.
+    pub fn handle(&self) -> Option<DeformableHandle> {
+        match self.soft {
+            Soft::Sinew(h) => Some(h),
+            Soft::Rapier(_) => None,
+        }
+    }
+
+    /// The subject simulated.
+    pub fn subject(&self) -> Subject {
+        self.subject
+    }
+
+    /// The pinned nodes: node, body, and the node's anchor in the body's frame.
+    pub fn pinned_nodes(&self) -> Vec<(u32, RigidBodyHandle, Vector)> {
+        self.pins
+            .iter()
+            .map(|p| (p.node, p.body, p.local))
+            .collect()
+    }
+
+    /// Node positions after the last step.
+    pub fn positions(&self) -> &[Vector] {
+        &self.x
+    }
+
+    /// Node velocities after the last step.
+    pub fn velocities(&self) -> &[Vector] {
+        &self.v
+    }
+
+    /// Node positions at the start.
+    pub fn rest_positions(&self) -> &[Vector] {
+        &self.rest
+    }
+
+    /// The rest mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// Cells inverted (signed volume ≤ 0) after the last step.
+    pub fn inverted_elements(&self) -> usize {
+        self.inverted
+    }
+
+    /// Smallest cell volume ratio after the last step.
+    pub fn min_volume_ratio(&self) -> Real {
+        self.step_min_ratio
+    }
+
+    /// Whether the state turned non-finite or blew up so far.
+    pub fn exploded(&self) -> bool {
+        self.exploded
+    }
+
+    /// The centre of mass.
+    pub fn center_of_mass(&self) -> Vector {
+        let m: Real = self.masses.iter().sum();
+        self.x
+            .iter()
+            .zip(&self.masses)
+            .map(|(p, m)| *p * *m)
+            .sum::<Vector>()
+            / m
+    }
+
+    /// The centre of mass velocity.
+    pub fn center_of_mass_velocity(&self) -> Vector {
+        let m: Real = self.masses.iter().sum();
+        self.v
+            .iter()
+            .zip(&self.masses)
+            .map(|(v, m)| *v * *m)
+            .sum::<Vector>()
+            / m
+    }
+
+    /// Kinetic energy, J.
+    pub fn kinetic_energy(&self) -> Real {
+        0.5 * self
+            .v
+            .iter()
+            .zip(&self.masses)
+            .map(|(v, m)| m * v.length_squared())
+            .sum::<Real>()
+    }
+
+    /// Height of the lowest node.
+    pub fn lowest(&self) -> Real {
+        self.x
+            .iter()
+            .map(|p| p.dot(UP))
+            .fold(Real::INFINITY, Real::min)
+    }
+
+    /// Largest node distance from the rest shape moved by the best rigid fit (mass-weighted
+    /// centroid, polar rotation of the covariance), over the body size.
+    pub fn shape_error(&self) -> Real {
+        let m: Real = self.masses.iter().sum();
+        let c0 = self
+            .rest
+            .iter()
+            .zip(&self.masses)
+            .map(|(p, m)| *p * *m)
+            .sum::<Vector>()
+            / m;
+        let c = self.center_of_mass();
+        let mut a = math::outer(Vector::ZERO, Vector::ZERO);
+        for ((x, x0), m) in self.x.iter().zip(&self.rest).zip(&self.masses) {
+            a += math::outer((*x - c) * *m, *x0 - c0);
+        }
+        let r = math::polar_rotation(a);
+        self.x
+            .iter()
+            .zip(&self.rest)
+            .map(|(x, x0)| (*x - c - r * (*x0 - c0)).length())
+            .fold(0.0, Real::max)
+            / self.size
+    }
+
+    /// A record with everything common to all scenes filled in.
+    pub(crate) fn record(&self, scene: &str, res: usize) -> Record {
+        let params = &self.world.physics.integration_parameters;
+        Record {
+            scene: scene.to_string(),
+            dim: DIM,
+            model: self.subject.name().to_string(),
+            iterations: self.subject.iterations(),
+            res,
+            nodes: self.x.len(),
+            elements: self.mesh.num_cells(),
+            dt: params.dt as f64,
+            substep_mode: if self.fixed_substeps.is_some() {
+                "fixed"
+            } else {
+                "auto"
+            }
+            .to_string(),
+            substeps: self.substeps as f64 / self.steps.max(1) as f64,
+            sim_s: self.world.time() as f64,
+            wall_s: self.wall,
+            young: self.material.young_modulus as f64,
+            poisson: self.material.poisson_ratio as f64,
+            min_vol_ratio: self.min_ratio as f64,
+            max_inverted_elements: self.max_inverted,
+            final_inverted_elements: self.inverted,
+            final_kinetic_energy: self.kinetic_energy() as f64,
+            nan: self.nan,
+            exploded: self.exploded,
+            ..Record::default()
+        }
+    }
+}
+
+fn attach_error(e: &AttachError) -> BuildError {
+    BuildError::InvalidParameter {
+        name: "pins",
+        value: Real::NAN,
+        expected: match e {
+            AttachError::NoSuchBody(_) => "pins on existing bodies",
+            AttachError::NodeOutOfRange { .. } => "pinned nodes in range",
+            _ => "valid pins",
+        },
+    }
+}

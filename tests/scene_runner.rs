@@ -1,0 +1,250 @@
+//! The scene runner (`examples/scenes`) through its own command-line entry point: every scene,
+//! briefly, in both dimensions, with every model; each JSON line must carry the documented keys
+//! with the documented types (issue 5, acceptance 1).
+
+#[path = "../examples/scenes/cli.rs"]
+mod cli;
+
+use serde_json::Value;
+
+/// Keys every line carries, with their JSON type: "s" string, "u" unsigned integer, "f" number,
+/// "f?" number or null, "b" boolean, "s?" string or null.
+const KEYS: &[(&str, &str)] = &[
+    ("scene", "s"),
+    ("dim", "u"),
+    ("model", "s"),
+    ("iterations", "s?"),
+    ("res", "u"),
+    ("nodes", "u"),
+    ("elements", "u"),
+    ("dt", "f"),
+    ("substeps", "f"),
+    ("substep_mode", "s"),
+    ("sim_s", "f"),
+    ("wall_s", "f"),
+    ("wall_per_sim_s", "f"),
+    ("mass", "f?"),
+    ("young", "f"),
+    ("poisson", "f"),
+    ("k_over_m", "f?"),
+    ("bounce_apex_com", "f?"),
+    ("rest_com", "f?"),
+    ("max_penetration", "f?"),
+    ("min_vol_ratio", "f"),
+    ("max_inverted_elements", "u"),
+    ("final_inverted_elements", "u"),
+    ("failed", "b"),
+    ("first_failure", "f?"),
+    ("shape_error", "f?"),
+    ("spurious_mean", "f?"),
+    ("spurious_std", "f?"),
+    ("spurious_max", "f?"),
+    ("max_anchor_error", "f?"),
+    ("final_kinetic_energy", "f"),
+    ("nan", "b"),
+    ("exploded", "b"),
+];
+
+fn type_ok(v: &Value, t: &str) -> bool {
+    match t {
+        "s" => v.is_string(),
+        "s?" => v.is_string() || v.is_null(),
+        "u" => v.is_u64(),
+        "f" => v.is_number(),
+        "f?" => v.is_number() || v.is_null(),
+        "b" => v.is_boolean(),
+        _ => false,
+    }
+}
+
+/// Runs the runner with `args` and returns its JSON lines, checked key by key.
+fn run(args: &[&str]) -> Vec<serde_json::Map<String, Value>> {
+    let mut argv = vec!["scenes"];
+    argv.extend_from_slice(args);
+    argv.push("--json");
+    let mut out = Vec::new();
+    let records = cli::run(argv.clone(), &mut out).unwrap_or_else(|e| panic!("{argv:?}: {e}"));
+    let text = String::from_utf8(out).expect("utf-8 output");
+    let lines: Vec<_> = text.lines().collect();
+    assert_eq!(lines.len(), records.len(), "one line per run");
+    assert!(!lines.is_empty(), "{argv:?} printed nothing");
+    lines
+        .iter()
+        .map(|line| {
+            let v: Value = serde_json::from_str(line).unwrap_or_else(|e| panic!("{line}: {e}"));
+            let obj = v.as_object().expect("one object per line").clone();
+            for (key, t) in KEYS {
+                let value = obj
+                    .get(*key)
+                    .unwrap_or_else(|| panic!("{argv:?}: key {key} missing in {line}"));
+                assert!(type_ok(value, t), "{argv:?}: {key} = {value} is not {t}");
+            }
+            assert_eq!(obj.len(), KEYS.len(), "unexpected keys in {line}");
+            obj
+        })
+        .collect()
+}
+
+fn models(lines: &[serde_json::Map<String, Value>]) -> Vec<String> {
+    let mut m: Vec<String> = lines
+        .iter()
+        .map(|l| l["model"].as_str().unwrap().to_string())
+        .collect();
+    m.dedup();
+    m
+}
+
+#[test]
+fn fall_runs_every_model_in_both_dimensions() {
+    let lines = run(&["fall", "--res", "3", "--seconds", "0.05"]);
+    let all = models(&lines);
+    for m in [
+        "springs",
+        "edge-repulsion",
+        "shape-matching",
+        "rapier-volume",
+        "rapier-corotational",
+        "rapier-neo-hookean",
+    ] {
+        assert!(all.iter().any(|x| x == m), "{m} missing from {all:?}");
+    }
+    let dims: Vec<u64> = lines.iter().map(|l| l["dim"].as_u64().unwrap()).collect();
+    assert!(dims.contains(&2) && dims.contains(&3));
+    for l in &lines {
+        assert_eq!(l["scene"], "fall");
+        assert!(l["rest_com"].is_number() && l["max_penetration"].is_number());
+        assert!((l["sim_s"].as_f64().unwrap() - 0.05).abs() < 1e-6);
+        // A 50 ms fall from 2 m: nothing touches the ground, nothing deforms much.
+        assert_eq!(l["max_inverted_elements"], 0, "{l:?}");
+        assert!(l["first_failure"].is_null() && l["shape_error"].is_null());
+    }
+}
+
+#[test]
+fn limb_reports_the_angle_of_failure() {
+    let lines = run(&[
+        "limb",
+        "--res",
+        "5",
+        "--seconds",
+        "0.3",
+        "--model",
+        "springs",
+        "rapier-volume",
+    ]);
+    assert_eq!(lines.len(), 4, "two models, two dimensions");
+    for l in &lines {
+        assert_eq!(l["scene"], "limb");
+        assert!(l["max_anchor_error"].is_number());
+        assert!((l["sim_s"].as_f64().unwrap() - 0.3).abs() < 1e-4);
+    }
+}
+
+#[test]
+fn crush_sweeps_masses_and_measures_recovery() {
+    let lines = run(&[
+        "crush",
+        "--res",
+        "3",
+        "--seconds",
+        "0.2",
+        "--mass",
+        "1",
+        "1000",
+        "--model",
+        "edge-repulsion",
+        "rapier-corotational",
+    ]);
+    assert_eq!(lines.len(), 8, "two masses, two models, two dimensions");
+    for l in &lines {
+        assert_eq!(l["scene"], "crush");
+        assert!(l["mass"].is_number() && l["shape_error"].is_number());
+    }
+}
+
+#[test]
+fn manipulator_counts_strikes() {
+    let lines = run(&[
+        "manipulator",
+        "--res",
+        "3",
+        "--strikes",
+        "2",
+        "--seconds",
+        "0.2",
+        "--model",
+        "shape-matching",
+        "--iterations",
+        "1",
+        "polar",
+    ]);
+    assert_eq!(lines.len(), 4);
+    let fits: Vec<&str> = lines
+        .iter()
+        .map(|l| l["iterations"].as_str().unwrap())
+        .collect();
+    assert_eq!(fits, ["1", "polar", "1", "polar"]);
+    for l in &lines {
+        assert!(l["shape_error"].is_number());
+    }
+}
+
+#[test]
+fn dt_sweep_runs_fixed_then_automatic_substeps() {
+    let lines = run(&[
+        "dt-sweep",
+        "--dim",
+        "2",
+        "--res",
+        "3",
+        "--seconds",
+        "0.05",
+        "--model",
+        "springs",
+    ]);
+    let modes: Vec<&str> = lines
+        .iter()
+        .map(|l| l["substep_mode"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        modes,
+        ["fixed"; 5]
+            .into_iter()
+            .chain(["auto"; 5])
+            .collect::<Vec<_>>()
+    );
+    let dts: Vec<f64> = lines
+        .iter()
+        .take(5)
+        .map(|l| l["dt"].as_f64().unwrap() * 1e3)
+        .collect();
+    for (dt, want) in dts.iter().zip([0.5, 1.0, 2.0, 5.0, 16.7]) {
+        assert!((dt - want).abs() < 1e-3, "dt {dt} ms, want {want}");
+    }
+    for l in lines.iter().take(5) {
+        assert_eq!(l["substeps"], 1.0, "fixed mode takes one substep per step");
+    }
+}
+
+#[test]
+fn rotation_error_reports_the_spread() {
+    let lines = run(&["rotation-error", "--k-over-m", "1e4", "--seconds", "0.3"]);
+    assert_eq!(lines.len(), 10, "five rows, two dimensions");
+    for l in &lines {
+        assert_eq!(l["model"], "shape-matching");
+        assert!(l["spurious_mean"].as_f64().unwrap() >= 0.0);
+        assert!(l["spurious_max"].as_f64().unwrap() >= l["spurious_mean"].as_f64().unwrap());
+    }
+}
+
+#[test]
+fn bad_arguments_are_errors_not_panics() {
+    let mut out = Vec::new();
+    let e = cli::run(["scenes", "fall", "--model", "jelly"], &mut out).unwrap_err();
+    assert!(e.contains("unknown model jelly"), "{e}");
+    let e = cli::run(["scenes", "fall", "--iterations", "7"], &mut out).unwrap_err();
+    assert!(e.contains("--iterations"), "{e}");
+    let e = cli::run(["scenes", "explode"], &mut out).unwrap_err();
+    assert!(e.contains("explode"), "{e}");
+    assert!(out.is_empty());
+}
