@@ -148,6 +148,13 @@ pub mod math {
         Vector::new(c[0], c[1])
     }
 
+    /// An angular quantity from its first components out of three (all three in 3D, the
+    /// first — about the plane's normal — in 2D).
+    #[inline]
+    pub fn ang_from_components(c: [Real; 3]) -> AngVector {
+        c[0]
+    }
+
     /// The "up" axis used for heights in reports and examples.
     pub const UP: Vector = Vector::Y;
 

@@ -82,6 +82,8 @@ pub struct Record {
     pub final_inverted_elements: usize,
     /// Whether this run failed by the scene's criterion (see the scene's docs).
     pub failed: bool,
+    /// Why the run failed, in a few words (`None` when it did not).
+    pub failure: Option<String>,
     /// The scene's failure point (see the scene's docs): an angle, a mass, a strike number, a
     /// step length in ms.
     pub first_failure: Option<f64>,
@@ -111,4 +113,12 @@ impl Record {
     pub fn wall_per_sim_s(&self) -> f64 {
         self.wall_s / self.sim_s.max(f64::MIN_POSITIVE)
     }
+}
+
+/// The reason for a failure from the conditions that make one, first true wins.
+pub fn failure(conditions: &[(bool, &str)]) -> Option<String> {
+    conditions
+        .iter()
+        .find(|(hit, _)| *hit)
+        .map(|(_, why)| why.to_string())
 }

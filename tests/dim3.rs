@@ -9,3 +9,6 @@ pub fn planar_revolute() -> sinew::dim3::rapier::dynamics::RevoluteJointBuilder 
 
 #[path = "shared/mod.rs"]
 mod shared;
+
+#[path = "only3d/rotation.rs"]
+mod rotation;

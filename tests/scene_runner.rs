@@ -34,6 +34,7 @@ const KEYS: &[(&str, &str)] = &[
     ("max_inverted_elements", "u"),
     ("final_inverted_elements", "u"),
     ("failed", "b"),
+    ("failure", "s?"),
     ("first_failure", "f?"),
     ("shape_error", "f?"),
     ("spurious_mean", "f?"),

@@ -189,6 +189,7 @@ pub fn to_json(r: &Record) -> Value {
         "max_inverted_elements": r.max_inverted_elements,
         "final_inverted_elements": r.final_inverted_elements,
         "failed": r.failed,
+        "failure": r.failure,
         "first_failure": r.first_failure,
         "shape_error": r.shape_error,
         "spurious_mean": spurious.map(|s| s.mean),
@@ -269,8 +270,10 @@ fn table_row(scene: Scene, r: &Record) -> String {
         }
     };
     let mut flags = Vec::new();
+    let why;
     if r.failed {
-        flags.push("FAILED");
+        why = format!("FAILED: {}", r.failure.as_deref().unwrap_or("?"));
+        flags.push(why.as_str());
     }
     if r.nan {
         flags.push("NAN");

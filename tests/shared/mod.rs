@@ -7,4 +7,5 @@ mod errors;
 mod fall;
 mod mesh;
 mod pipeline;
+mod scenes;
 mod support;

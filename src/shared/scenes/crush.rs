@@ -146,7 +146,12 @@ impl CrushScene {
         r.rest_com = Some(sim.center_of_mass().dot(UP) as f64);
         r.max_penetration = Some(max_penetration as f64);
         r.shape_error = Some(sim.shape_error() as f64);
-        r.failed = r.exploded || r.max_inverted_elements > 0 || lowest_lid <= 0.01 * c.size;
+        r.failure = crate::record::failure(&[
+            (r.exploded, "exploded"),
+            (r.max_inverted_elements > 0, "inverted cells"),
+            (lowest_lid <= 0.01 * c.size, "box reached the ground"),
+        ]);
+        r.failed = r.failure.is_some();
         Ok(r)
     }
 

@@ -166,7 +166,11 @@ impl LimbScene {
             }
         }
         let mut r = sim.record("limb", self.resolution());
-        r.failed = first.is_some();
+        r.failure = crate::record::failure(&[
+            (first.is_some(), "inverted cells"),
+            (r.exploded, "exploded"),
+        ]);
+        r.failed = r.failure.is_some();
         r.first_failure = first.map(|d| d as f64);
         r.max_anchor_error = Some(anchor_error as f64);
         Ok(r)

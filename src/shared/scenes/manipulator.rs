@@ -108,7 +108,11 @@ impl ManipulatorScene {
         r.rest_com = Some(sim.center_of_mass().dot(UP) as f64);
         r.max_penetration = Some(max_penetration as f64);
         r.shape_error = Some(sim.shape_error() as f64);
-        r.failed = first.is_some() || r.exploded;
+        r.failure = crate::record::failure(&[
+            (r.exploded, "exploded"),
+            (first.is_some(), "cells left inverted after a strike"),
+        ]);
+        r.failed = r.failure.is_some();
         r.first_failure = first.map(|s| s as f64);
         Ok(r)
     }

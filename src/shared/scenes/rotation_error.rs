@@ -11,8 +11,9 @@ use super::sim::{BodySpec, Sim};
 use super::subject::Subject;
 use super::{Record, Spread};
 
-/// One shape-based cube element (a square in 2D), 1 m and 1 kg, dropped from ten times its
-/// size onto the ground with one substep per step of `dt = period / divisions`, `period =
+/// One shape-based cube element (a square in 2D), 1 m and 1 kg, dropped tumbling from ten times
+/// its size onto the ground — tilted by 0.5 rad and spinning at 5 rad/s about skew axes in 3D,
+/// about the plane's normal in 2D — with one substep per step of `dt = period / divisions`, `period =
 /// 2π/√(k/m)`; after every step the spurious angular acceleration of its element forces,
 /// `|Σ rᵢ × fᵢ| / I` about the centroid (`I` the moment of inertia about the torque's axis),
 /// is sampled. An exact rotation fit gives none: the element forces of a rotated rest shape
@@ -100,7 +101,16 @@ impl RotationErrorScene {
             fit: self.fit,
             damping: ShapeDamping::RigidMotion,
         });
+        spec.rotation = math::rotation_from_angle(tilt());
         let mut sim = Sim::new(world, subject, spec, 1.0, Some(1))?;
+        let c = sim.center_of_mass();
+        let spin = spin();
+        let v: Vec<Vector> = sim
+            .positions()
+            .iter()
+            .map(|p| math::ang_cross(spin, *p - c))
+            .collect();
+        sim.set_velocities(&v)?;
         let steps = (self.seconds / dt).round().max(1.0) as usize;
         let mut samples = Vec::with_capacity(steps);
         let mut before: Vec<Vector> = sim.positions().to_vec();
@@ -152,4 +162,18 @@ pub fn spurious_acceleration(x: &[Vector], masses: &[Real], forces: &[Vector]) -
         .map(|(p, m)| m * math::ang_cross(axis, *p - c).length_squared())
         .sum();
     t / inertia
+}
+
+/// The initial tilt: 0.5 rad about a skew axis (the plane's normal in 2D).
+fn tilt() -> math::AngVector {
+    scaled(math::ang_from_components([0.6, 0.7, 0.4]), 0.5)
+}
+
+/// The initial spin: 5 rad/s about another skew axis (the plane's normal in 2D).
+fn spin() -> math::AngVector {
+    scaled(math::ang_from_components([0.3, -0.5, 0.8]), 5.0)
+}
+
+fn scaled(axis: math::AngVector, length: Real) -> math::AngVector {
+    axis * (length / math::ang_norm(axis))
 }

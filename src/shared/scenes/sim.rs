@@ -7,7 +7,7 @@ use super::super::attach::AttachError;
 use super::super::body::DeformableBuilder;
 use super::super::error::BuildError;
 use super::super::material::{Material, Stiffness};
-use super::super::math::{self, Real, Vector, DIM, SIMPLEX_ARITY, UP};
+use super::super::math::{self, Real, Rotation, Vector, DIM, SIMPLEX_ARITY, UP};
 use super::super::mesh::{CellKind, Mesh};
 use super::super::rapier::dynamics::{RigidBodyHandle, SoftBodyBuilder, SoftBodyHandle};
 use super::super::rapier::geometry::ColliderBuilder;
@@ -42,6 +42,8 @@ pub(crate) struct BodySpec {
     pub mesh: Mesh,
     /// Where the mesh's origin goes.
     pub translation: Vector,
+    /// How the mesh is turned (about its origin) before it is moved there.
+    pub rotation: Rotation,
     pub material: Material,
     /// sinew only: how stiffness follows from the material.
     pub stiffness: Stiffness,
@@ -56,6 +58,7 @@ impl BodySpec {
         BodySpec {
             mesh,
             translation,
+            rotation: Rotation::IDENTITY,
             material,
             stiffness: Stiffness::FromMaterial,
             friction: 0.5,
@@ -153,6 +156,7 @@ impl Sim {
                     .friction(spec.friction)
                     .restitution(spec.restitution)
                     .translation(spec.translation)
+                    .rotation(spec.rotation)
                     .build()?;
                 let h = world.insert(body);
                 for (body, nodes) in &spec.pins {
@@ -224,6 +228,33 @@ impl Sim {
         };
         sim.read_back();
         Ok(sim)
+    }
+
+    /// Sets the node velocities (the state's other measures follow at the next step).
+    pub fn set_velocities(&mut self, velocities: &[Vector]) -> Result<(), BuildError> {
+        match self.soft {
+            Soft::Sinew(h) => {
+                if let Some(d) = self.world.deformables.get_mut(h) {
+                    d.set_velocities(velocities)?;
+                }
+            }
+            Soft::Rapier(h) => {
+                if velocities.len() != self.v.len() {
+                    return Err(BuildError::InvalidParameter {
+                        name: "velocities",
+                        value: velocities.len() as Real,
+                        expected: "one velocity per node",
+                    });
+                }
+                if let Some(sb) = self.world.physics.soft_bodies.get_mut(h) {
+                    for (i, v) in velocities.iter().enumerate() {
+                        sb.set_particle_velocity(i, *v);
+                    }
+                }
+            }
+        }
+        self.read_back();
+        Ok(())
     }
 
     /// One step of the world; returns the wall time it took, s.
