@@ -275,10 +275,10 @@ fn table_row(scene: Scene, r: &Record) -> String {
         why = format!("FAILED: {}", r.failure.as_deref().unwrap_or("?"));
         flags.push(why.as_str());
     }
-    if r.nan {
+    if r.nan && !r.failed {
         flags.push("NAN");
     }
-    if r.exploded {
+    if r.exploded && !r.failed {
         flags.push("EXPLODED");
     }
     format!(
@@ -499,7 +499,8 @@ macro_rules! dimension_runner {
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
                         }
-                        Scene::RotationError => unreachable!("handled above"),
+                        // Run above: it has one subject of its own.
+                        Scene::RotationError => Vec::new(),
                     };
                     for r in records {
                         emit(r)?;

@@ -158,8 +158,13 @@ impl FallScene {
         r.bounce_apex_com = apex.map(|a| a as f64);
         r.rest_com = Some(sim.center_of_mass().dot(UP) as f64);
         r.max_penetration = Some(max_penetration as f64);
-        r.failed =
-            r.exploded || r.final_inverted_elements > 0 || max_penetration > 0.25 * self.size;
+        r.failure = crate::record::failure(&[
+            (r.nan, "non-finite state"),
+            (r.exploded, "exploded"),
+            (r.final_inverted_elements > 0, "ended with inverted cells"),
+            (max_penetration > 0.25 * self.size, "sank into the ground"),
+        ]);
+        r.failed = r.failure.is_some();
         Ok(r)
     }
 
