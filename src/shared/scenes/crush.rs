@@ -2,12 +2,11 @@
 
 use super::super::error::BuildError;
 use super::super::math::{Real, Vector, DIM, UP};
-use super::super::mesh::Mesh;
 use super::super::rapier::dynamics::{LockedAxes, RigidBodyBuilder, RigidBodyType};
 use super::super::rapier::geometry::ColliderBuilder;
 use super::super::world::DeformableWorld;
-use super::fall::{cuboid, ground, set_first_failure, FallScene};
-use super::sim::{BodySpec, Sim, RAPIER_SKIN};
+use super::fall::{cuboid, set_first_failure, FallScene};
+use super::sim::RAPIER_SKIN;
 use super::Record;
 
 /// The `fall` cube resting on the ground, crushed by a dynamic 1.2 m wide, 0.1 m thick rigid
@@ -70,9 +69,7 @@ impl CrushScene {
         mut observe: impl FnMut(&DeformableWorld, f64),
     ) -> Result<Record, BuildError> {
         let c = &self.cube;
-        let mut world = DeformableWorld::new();
-        world.set_dt(c.dt);
-        ground(&mut world, c.friction, c.restitution);
+        let mut world = c.ground_world();
         let mut half = Vector::splat(0.6 * c.size);
         half[1] = 0.05 * c.size;
         let locked = if self.guided {
@@ -93,11 +90,7 @@ impl CrushScene {
         );
         let lid = lid.0;
         let start_height = c.size + 2.0 * RAPIER_SKIN + half[1];
-        let mesh = Mesh::cuboid(Vector::splat(0.5 * c.size), [c.resolution; DIM], c.cells)?;
-        let mut spec = BodySpec::new(mesh, UP * (0.5 * c.size + RAPIER_SKIN), c.material());
-        spec.friction = c.friction;
-        spec.restitution = c.restitution;
-        let mut sim = Sim::new(world, c.subject, spec, c.size, c.fixed_substeps)?;
+        let mut sim = c.sim_in(world, RAPIER_SKIN)?;
 
         let total = self.settle + self.hold + self.lift + self.recover;
         let steps = (total / c.dt).round() as usize;

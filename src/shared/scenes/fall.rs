@@ -101,24 +101,30 @@ impl FallScene {
         }
     }
 
-    /// The world: a fixed ground (top at height 0) and the box above it.
-    pub fn sim(&self) -> Result<Sim, BuildError> {
+    /// A world of this scene's dt with the fixed ground (top at height 0), nothing else.
+    pub(crate) fn ground_world(&self) -> DeformableWorld {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         ground(&mut world, self.friction, self.restitution);
+        world
+    }
+
+    /// `world` with the box added, its bottom at height `bottom`.
+    pub(crate) fn sim_in(&self, world: DeformableWorld, bottom: Real) -> Result<Sim, BuildError> {
         let mesh = Mesh::cuboid(
             Vector::splat(0.5 * self.size),
             [self.resolution; DIM],
             self.cells,
         )?;
-        let mut spec = BodySpec::new(
-            mesh,
-            UP * (self.drop_height + 0.5 * self.size),
-            self.material(),
-        );
+        let mut spec = BodySpec::new(mesh, UP * (bottom + 0.5 * self.size), self.material());
         spec.friction = self.friction;
         spec.restitution = self.restitution;
         Sim::new(world, self.subject, spec, self.size, self.fixed_substeps)
+    }
+
+    /// The world: a fixed ground (top at height 0) and the box above it.
+    pub fn sim(&self) -> Result<Sim, BuildError> {
+        self.sim_in(self.ground_world(), self.drop_height)
     }
 
     /// Runs the scene, calling `observe` after every step with the world and the fraction done.

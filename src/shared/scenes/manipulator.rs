@@ -1,13 +1,12 @@
 //! The `manipulator` scene (shape-based elasticity paper, §3.5).
 
 use super::super::error::BuildError;
-use super::super::math::{Real, Vector, DIM, UP};
-use super::super::mesh::Mesh;
+use super::super::math::{Real, Vector, UP};
 use super::super::rapier::dynamics::RigidBodyBuilder;
 use super::super::rapier::geometry::ColliderBuilder;
 use super::super::world::DeformableWorld;
-use super::fall::{cuboid, ground, FallScene};
-use super::sim::{BodySpec, Sim, RAPIER_SKIN};
+use super::fall::{cuboid, FallScene};
+use super::sim::RAPIER_SKIN;
 use super::Record;
 
 /// The `fall` cube resting on the ground, struck again and again from above by a kinematic
@@ -52,9 +51,7 @@ impl ManipulatorScene {
         mut observe: impl FnMut(&DeformableWorld, f64),
     ) -> Result<Record, BuildError> {
         let c = &self.cube;
-        let mut world = DeformableWorld::new();
-        world.set_dt(c.dt);
-        ground(&mut world, c.friction, c.restitution);
+        let mut world = c.ground_world();
         let mut half = Vector::splat(0.2 * c.size);
         half[1] = 0.1 * c.size;
         let high = c.size + RAPIER_SKIN + 0.2 * c.size + half[1];
@@ -63,11 +60,7 @@ impl ManipulatorScene {
             RigidBodyBuilder::kinematic_position_based().translation(UP * high),
             ColliderBuilder::new(cuboid(half)).friction(c.friction),
         );
-        let mesh = Mesh::cuboid(Vector::splat(0.5 * c.size), [c.resolution; DIM], c.cells)?;
-        let mut spec = BodySpec::new(mesh, UP * (0.5 * c.size + RAPIER_SKIN), c.material());
-        spec.friction = c.friction;
-        spec.restitution = c.restitution;
-        let mut sim = Sim::new(world, c.subject, spec, c.size, c.fixed_substeps)?;
+        let mut sim = c.sim_in(world, RAPIER_SKIN)?;
 
         let total = self.settle + self.strikes as Real * self.period;
         let steps = (total / c.dt).round() as usize;
