@@ -1,35 +1,109 @@
-//! One step of the `fall` scene's body per element model, 2D and 3D, at a few resolutions.
-//! Throughput is reported in elements, so criterion prints element-updates per second.
+//! One step of the `fall` scene's box, resting on the ground, per model, 2D and 3D, at
+//! resolutions 5, 9, 17 and 33 nodes per edge (up to 32³·5 = 163 840 tetrahedra), for each of
+//! sinew's element models and rapier's own soft-body models on the same mesh.
+//!
+//! Two groups per dimension:
+//! - `fall_step_{2d,3d}`: one 1 ms step, each solver choosing its own substeps (sinew: from
+//!   the stability bound; rapier: its defaults, 4 solver iterations). Throughput is elements,
+//!   so criterion's `elem/s` is element-steps per second at equal dt.
+//! - `element_update_{2d,3d}`: sinew's models only, one step of exactly one substep, with dt
+//!   small enough for every model to be stable (`0.4 ms / (res − 1)`). Throughput is elements,
+//!   so `elem/s` is element-updates per second: the same work for every model, the comparison
+//!   the shape-based paper makes ("1.05 times the cost of a spring element").
 //!
 //! ```text
-//! cargo bench --bench step            # full run
-//! cargo bench --bench step -- --quick # a short pass
+//! cargo bench --bench step                          # everything (~30 min)
+//! cargo bench --bench step -- --quick               # a shorter pass
+//! SINEW_BENCH_RES=5,9 cargo bench --bench step      # only these resolutions
+//! cargo bench --bench step -- 'element_update_3d/'  # one group
 //! ```
+//!
+//! Under `cargo test --benches` (criterion's test mode) only resolution 5 is built and each
+//! benchmark runs once.
+
+use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 
+/// The resolutions to run: `SINEW_BENCH_RES` (comma separated), else 5 in test mode (no
+/// `--bench` argument, as under `cargo test --benches`), else 5, 9, 17, 33.
+fn resolutions() -> Vec<usize> {
+    if let Ok(list) = std::env::var("SINEW_BENCH_RES") {
+        return list
+            .split(',')
+            .map(|s| {
+                s.trim()
+                    .parse()
+                    .expect("SINEW_BENCH_RES: comma-separated integers")
+            })
+            .collect();
+    }
+    if std::env::args().any(|a| a == "--bench") {
+        vec![5, 9, 17, 33]
+    } else {
+        vec![5]
+    }
+}
+
+/// Steps run before measuring, so the box rests on the ground and contacts are in the step.
+const SETTLE_STEPS: usize = 20;
+
 macro_rules! bench_dimension {
-    ($c:expr, $dim:ident, $label:expr, $resolutions:expr) => {{
-        use sinew::$dim::scenes::FallScene;
-        use sinew::$dim::ElementModel;
-        let mut group = $c.benchmark_group(concat!("step_", $label));
-        group.sample_size(20);
-        for res in $resolutions {
-            for model in ElementModel::ALL {
+    ($c:expr, $dim:ident, $label:expr) => {{
+        use sinew::$dim::scenes::{FallScene, Subject};
+        let resolutions = resolutions();
+
+        let mut group = $c.benchmark_group(concat!("fall_step_", $label));
+        group.sample_size(10);
+        group.warm_up_time(Duration::from_millis(500));
+        group.measurement_time(Duration::from_secs(3));
+        for &res in &resolutions {
+            for subject in Subject::all() {
                 let scene = FallScene {
-                    subject: model.into(),
+                    subject,
                     resolution: res,
+                    drop_height: 0.0,
                     ..FallScene::default()
                 };
                 let sim = scene.sim().expect("scene builds");
                 let elements = sim.mesh().num_cells() as u64;
                 let mut world = sim.world;
-                // Let it land first so contacts are part of the step.
-                for _ in 0..700 {
+                for _ in 0..SETTLE_STEPS {
                     world.step();
                 }
                 group.throughput(Throughput::Elements(elements));
-                group.bench_with_input(BenchmarkId::new(model.name(), res), &res, |b, _| {
+                group.bench_with_input(BenchmarkId::new(subject.name(), res), &res, |b, _| {
+                    b.iter(|| world.step().wall_time)
+                });
+            }
+        }
+        group.finish();
+
+        let mut group = $c.benchmark_group(concat!("element_update_", $label));
+        group.sample_size(10);
+        group.warm_up_time(Duration::from_millis(500));
+        group.measurement_time(Duration::from_secs(3));
+        for &res in &resolutions {
+            for subject in Subject::all() {
+                if !matches!(subject, Subject::Sinew(_)) {
+                    continue;
+                }
+                let scene = FallScene {
+                    subject,
+                    resolution: res,
+                    drop_height: 0.0,
+                    dt: 4.0e-4 / (res - 1) as sinew::$dim::math::Real,
+                    fixed_substeps: Some(1),
+                    ..FallScene::default()
+                };
+                let sim = scene.sim().expect("scene builds");
+                let elements = sim.mesh().num_cells() as u64;
+                let mut world = sim.world;
+                for _ in 0..SETTLE_STEPS {
+                    world.step();
+                }
+                group.throughput(Throughput::Elements(elements));
+                group.bench_with_input(BenchmarkId::new(subject.name(), res), &res, |b, _| {
                     b.iter(|| world.step().wall_time)
                 });
             }
@@ -39,8 +113,8 @@ macro_rules! bench_dimension {
 }
 
 fn steps(c: &mut Criterion) {
-    bench_dimension!(c, dim3, "3d", [5usize, 9]);
-    bench_dimension!(c, dim2, "2d", [5usize, 17]);
+    bench_dimension!(c, dim3, "3d");
+    bench_dimension!(c, dim2, "2d");
 }
 
 criterion_group!(benches, steps);

@@ -90,6 +90,8 @@ pub struct Record {
     /// Largest node distance from the rest shape after removing rigid motion, over the body
     /// size.
     pub shape_error: Option<f64>,
+    /// Volume over rest volume at the end of a static load (the crush hold).
+    pub loaded_volume_ratio: Option<f64>,
     /// Largest distance of a pinned node from its anchor on its bone, m (limb).
     pub max_anchor_error: Option<f64>,
     /// Spurious angular acceleration of the element forces, rad/s² (rotation-error).

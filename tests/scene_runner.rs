@@ -37,6 +37,7 @@ const KEYS: &[(&str, &str)] = &[
     ("failure", "s?"),
     ("first_failure", "f?"),
     ("shape_error", "f?"),
+    ("loaded_volume_ratio", "f?"),
     ("spurious_mean", "f?"),
     ("spurious_std", "f?"),
     ("spurious_max", "f?"),
@@ -160,6 +161,9 @@ fn crush_sweeps_masses_and_measures_recovery() {
     for l in &lines {
         assert_eq!(l["scene"], "crush");
         assert!(l["mass"].is_number() && l["shape_error"].is_number());
+        assert!(l["loaded_volume_ratio"]
+            .as_f64()
+            .is_some_and(|v| v > 0.0 && v < 1.0));
     }
 }
 

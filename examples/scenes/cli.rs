@@ -192,6 +192,7 @@ pub fn to_json(r: &Record) -> Value {
         "failure": r.failure,
         "first_failure": r.first_failure,
         "shape_error": r.shape_error,
+        "loaded_volume_ratio": r.loaded_volume_ratio,
         "spurious_mean": spurious.map(|s| s.mean),
         "spurious_std": spurious.map(|s| s.std),
         "spurious_max": spurious.map(|s| s.max),

@@ -173,5 +173,6 @@ impl Deformable {
             self.attachment_of[a.node as usize] = k as u32;
         }
         self.forces_valid = false;
+        self.wake_up();
     }
 }

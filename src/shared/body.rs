@@ -43,6 +43,12 @@ pub struct Deformable {
     pub(crate) contacts: Vec<ContactPoint>,
     /// Colliders touched during the last step, sorted.
     pub(crate) touching: Vec<super::rapier::geometry::ColliderHandle>,
+    /// Whether the body may fall asleep.
+    pub(crate) can_sleep: bool,
+    /// Whether the body is asleep (not simulated until something disturbs it).
+    pub(crate) sleeping: bool,
+    /// How long the body has been still, s.
+    pub(crate) still_time: Real,
     /// Free for the user.
     pub user_data: u128,
 }
@@ -201,12 +207,39 @@ impl Deformable {
         self.forces_valid = false;
     }
 
+    /// Whether the body is asleep: it rested long enough with nothing moving near it, and is
+    /// not simulated until a bone it is bound to moves, a moving or awake dynamic body comes
+    /// near it, or [`Deformable::wake_up`] (or any setter of its state) is called.
+    pub fn is_sleeping(&self) -> bool {
+        self.sleeping
+    }
+
+    /// Wakes the body up (and restarts its still-time count).
+    pub fn wake_up(&mut self) {
+        self.sleeping = false;
+        self.still_time = 0.0;
+    }
+
+    /// Whether the body may fall asleep (see [`DeformableBuilder::can_sleep`]).
+    pub fn can_sleep(&self) -> bool {
+        self.can_sleep
+    }
+
+    /// Allows or forbids sleeping; forbidding it wakes the body.
+    pub fn set_can_sleep(&mut self, can_sleep: bool) {
+        self.can_sleep = can_sleep;
+        if !can_sleep {
+            self.wake_up();
+        }
+    }
+
     /// Sets all node positions. Errors if the count differs or a coordinate is not finite; the
     /// state is unchanged then.
     pub fn set_positions(&mut self, positions: &[Vector]) -> Result<(), BuildError> {
         check_state(positions, self.positions.len())?;
         self.positions.copy_from_slice(positions);
         self.forces_valid = false;
+        self.wake_up();
         Ok(())
     }
 
@@ -216,6 +249,7 @@ impl Deformable {
         check_state(velocities, self.velocities.len())?;
         self.velocities.copy_from_slice(velocities);
         self.forces_valid = false;
+        self.wake_up();
         Ok(())
     }
 
@@ -224,6 +258,7 @@ impl Deformable {
         check_state(&[velocity], 1)?;
         self.velocities.fill(velocity);
         self.forces_valid = false;
+        self.wake_up();
         Ok(())
     }
 }
@@ -286,6 +321,7 @@ pub struct DeformableBuilder {
     gravity_scale: Real,
     groups: InteractionGroups,
     ignore_attached_bodies: bool,
+    can_sleep: bool,
     user_data: u128,
 }
 
@@ -321,6 +357,7 @@ impl DeformableBuilder {
             gravity_scale: 1.0,
             groups: InteractionGroups::all(),
             ignore_attached_bodies: true,
+            can_sleep: true,
             user_data: 0,
         }
     }
@@ -407,6 +444,13 @@ impl DeformableBuilder {
     /// (default `true`: tissue skinned onto a bone overlaps it by construction).
     pub fn ignore_attached_bodies(mut self, ignore: bool) -> Self {
         self.ignore_attached_bodies = ignore;
+        self
+    }
+
+    /// Whether the body may fall asleep when it rests (default `true`, as rapier's bodies;
+    /// thresholds in [`PipelineSettings`](super::PipelineSettings)).
+    pub fn can_sleep(mut self, can_sleep: bool) -> Self {
+        self.can_sleep = can_sleep;
         self
     }
 
@@ -511,6 +555,9 @@ impl DeformableBuilder {
             attachments: Vec::new(),
             attachment_of: vec![u32::MAX; n],
             touching: Vec::new(),
+            can_sleep: self.can_sleep,
+            sleeping: false,
+            still_time: 0.0,
             contacts: Vec::new(),
             positions,
             masses,

@@ -502,6 +502,17 @@ pub(crate) fn resolve_node(
             let offset = proj.point - local;
             let depth = offset.length();
             if depth <= Real::EPSILON {
+                // On the surface: a touching contact (gap 0), so that the velocity constraint
+                // holds; skipping it let a resting node sink for a substep, be pushed out the
+                // next, and chatter forever.
+                let normal = shape
+                    .feature_normal_at_point(Default::default(), feature, proj.point)
+                    .filter(|n| n.is_finite() && n.length_squared() > 0.5);
+                if let Some(n) = normal {
+                    if best.is_none_or(|b| !b.4 && b.0 > 0.0) {
+                        best = Some((0.0, pose.rotation * n, start, ci, false));
+                    }
+                }
                 continue;
             }
             let mut point = pose.transform_point(proj.point);

@@ -43,6 +43,11 @@ pub struct PipelineSettings {
     pub fixed_substeps: Option<usize>,
     /// Approach speeds below this (m/s) give a resting contact, not a bounce (default 0.1).
     pub restitution_threshold: Real,
+    /// A body whose every node is slower than this (m/s) is still (default 0.01 m/s).
+    pub sleep_speed: Real,
+    /// A body still this long (s), with no bone it is bound to moving and no moving or awake
+    /// dynamic body near it, falls asleep (default 2 s, rapier's `time_until_sleep`).
+    pub time_until_sleep: Real,
 }
 
 impl Default for PipelineSettings {
@@ -52,6 +57,8 @@ impl Default for PipelineSettings {
             max_substeps: 20_000,
             fixed_substeps: None,
             restitution_threshold: 0.1,
+            sleep_speed: 0.01,
+            time_until_sleep: 2.0,
         }
     }
 }
@@ -103,6 +110,76 @@ pub(crate) fn stable_substep(masses: &[Real], stiffness: &[Real], damping: &[Rea
         h = h.min(hi);
     }
     h
+}
+
+/// Whether a rigid body moves this step: a dynamic body that is awake, a kinematic body with
+/// a next pose or a velocity.
+fn is_moving(body: &super::rapier::dynamics::RigidBody) -> bool {
+    use super::rapier::dynamics::RigidBodyType;
+    match body.body_type() {
+        RigidBodyType::Fixed => false,
+        RigidBodyType::KinematicPositionBased => {
+            let (p0, p1) = (body.position(), body.next_position());
+            p0.translation != p1.translation || p0.rotation != p1.rotation
+        }
+        RigidBodyType::KinematicVelocityBased => {
+            body.linvel() != Vector::ZERO || math::ang_norm(body.angvel()) != 0.0
+        }
+        _ => !body.is_sleeping(),
+    }
+}
+
+/// Whether something wakes a sleeping deformable: a bone it is bound to moves, a collider it
+/// touched was removed, or a moving body's collider is near it.
+fn disturbed(
+    body: &Deformable,
+    margin: Real,
+    indexed: bool,
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    broad_phase: &BroadPhaseBvh,
+    sc: &mut Scratch,
+) -> bool {
+    sc.attached_bodies.clear();
+    for a in &body.attachments {
+        if !sc.attached_bodies.contains(&a.body) {
+            sc.attached_bodies.push(a.body);
+        }
+    }
+    if sc
+        .attached_bodies
+        .iter()
+        .any(|h| bodies.get(*h).is_none_or(is_moving))
+    {
+        return true;
+    }
+    if body.touching.iter().any(|c| !colliders.contains(*c)) {
+        return true;
+    }
+    let mut region = Aabb::new_invalid();
+    for &i in body.mesh.boundary_nodes() {
+        region.take_point(body.positions[i as usize]);
+    }
+    let size = (region.maxs - region.mins).max_element().max(1e-3);
+    contact::near_colliders(
+        region.loosened(margin + 1e-2 * size),
+        indexed,
+        &body.contact,
+        &sc.attached_bodies,
+        bodies,
+        colliders,
+        broad_phase,
+        &mut sc.near,
+    );
+    let woken = sc.near.iter().any(|h| {
+        colliders
+            .get(*h)
+            .and_then(|c| c.parent())
+            .and_then(|p| bodies.get(p))
+            .is_some_and(is_moving)
+    });
+    sc.near.clear();
+    woken
 }
 
 /// How far any collider attached to a moving body may travel in `dt` (a margin for broad-phase
@@ -185,6 +262,35 @@ impl DeformablePipeline {
         let indexed = contact::broad_phase_is_current(broad_phase, bodies, colliders);
         for (handle, body) in deformables.iter_mut() {
             let detached = body.prune_attachments(bodies);
+            if body.sleeping
+                && (!body.can_sleep
+                    || disturbed(
+                        body,
+                        margin,
+                        indexed,
+                        bodies,
+                        colliders,
+                        broad_phase,
+                        &mut self.scratch,
+                    ))
+            {
+                body.wake_up();
+            }
+            if body.sleeping {
+                // Asleep: not simulated, contacts (and so events) unchanged.
+                let r = &mut body.report;
+                r.sleeping = true;
+                r.substeps = 0;
+                r.limiter_substeps = 0;
+                r.time_forces = 0.0;
+                r.time_contacts = 0.0;
+                r.time_integrate = 0.0;
+                r.detached = detached;
+                r.attached_nodes = body.attachments.len();
+                self.report.deformables.push((handle, body.report.clone()));
+                continue;
+            }
+            body.report.sleeping = false;
             if !body.frozen && dt > 0.0 {
                 self.step_one(
                     body,
@@ -648,6 +754,24 @@ impl DeformablePipeline {
                 inverted += 1;
             }
             min_ratio = min_ratio.min(q);
+        }
+        // Sleep: still long enough, with nothing around it moving.
+        let quiet = sc
+            .motions
+            .iter()
+            .all(|m| bodies.get(m.handle).is_some_and(|b| !is_moving(b)));
+        let max_speed = (0..n)
+            .filter(|&i| !body.is_attached(i as u32))
+            .map(|i| body.velocities[i].length())
+            .fold(0.0, Real::max);
+        if body.can_sleep && finite && quiet && max_speed < settings.sleep_speed {
+            body.still_time += dt;
+        } else {
+            body.still_time = 0.0;
+        }
+        if body.still_time >= settings.time_until_sleep {
+            body.sleeping = true;
+            body.velocities.fill(Vector::ZERO);
         }
         let kinetic = body.kinetic_energy();
         let gravity_energy = -body

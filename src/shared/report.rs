@@ -48,6 +48,10 @@ pub struct DeformableReport {
     pub non_finite: bool,
     /// Whether the body is frozen (not simulated).
     pub frozen: bool,
+    /// Whether the body is asleep (not simulated this step; see
+    /// [`Deformable::is_sleeping`](super::Deformable::is_sleeping)). The other fields keep
+    /// the values of its last simulated step, but `substeps` and the times, which are zero.
+    pub sleeping: bool,
     /// Wall time spent on element forces, s.
     pub time_forces: f64,
     /// Wall time spent on contacts (broad phase and node tests), s.

@@ -26,16 +26,20 @@ fn rotation_error_falls_with_iterations_and_smaller_dt() {
         one > 10.0 * two,
         "2 iterations barely beat 1: {one} vs {two}"
     );
-    assert!(three <= two, "3 iterations worse than 2: {three} vs {two}");
     assert!(
         one_fine < 0.1 * one,
         "dt/10 barely helped: {one_fine} vs {one}"
     );
-    // The polar fit is exact: what is left is f32 rounding of k (R X + c − x), the floor
-    // under every row.
+    // From 2 iterations on, the fit is at the float-noise floor that the exact polar fit
+    // shares: what is left is f32 rounding of k (R X + c − x). Rows at the floor are ordered
+    // by noise, so they are compared as a band.
+    let floor = [two, three, polar];
+    let (lo, hi) = floor.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+        (lo.min(v), hi.max(v))
+    });
     assert!(
-        polar <= three * 1.05,
-        "polar above 3 iterations: {polar} vs {three}"
+        hi < 2.0 * lo,
+        "2, 3 iterations and polar not one floor: {floor:?}"
     );
     assert!(
         polar < 0.01 * one,

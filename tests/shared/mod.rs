@@ -6,6 +6,8 @@ mod elements;
 mod errors;
 mod fall;
 mod mesh;
+mod metrics;
 mod pipeline;
 mod scenes;
+mod sleep;
 mod support;

@@ -6,6 +6,7 @@ use super::super::rapier::dynamics::{LockedAxes, RigidBodyBuilder, RigidBodyType
 use super::super::rapier::geometry::ColliderBuilder;
 use super::super::world::DeformableWorld;
 use super::fall::{cuboid, set_first_failure, FallScene};
+use super::metrics::volume_ratio;
 use super::sim::RAPIER_SKIN;
 use super::Record;
 
@@ -97,6 +98,7 @@ impl CrushScene {
         let mut max_penetration: Real = 0.0;
         let mut lowest_lid = Real::INFINITY;
         let mut present = true;
+        let mut loaded_volume_ratio = None;
         for k in 0..steps {
             let t = (k as Real + 1.0) * c.dt - self.settle;
             // The load ramps in and holds; then the box is lifted back to where it started, at
@@ -115,6 +117,10 @@ impl CrushScene {
                 present = false;
             }
             sim.step();
+            // The static load's last step: the volume under it.
+            if t < self.hold && t + c.dt >= self.hold {
+                loaded_volume_ratio = Some(volume_ratio(sim.mesh(), sim.positions()) as f64);
+            }
             max_penetration = max_penetration.max(-sim.lowest());
             if let Some(b) = sim.world.physics.bodies.get(lid) {
                 let pose = b.position();
@@ -139,6 +145,7 @@ impl CrushScene {
         r.rest_com = Some(sim.center_of_mass().dot(UP) as f64);
         r.max_penetration = Some(max_penetration as f64);
         r.shape_error = Some(sim.shape_error() as f64);
+        r.loaded_volume_ratio = loaded_volume_ratio;
         r.failure = crate::record::failure(&[
             (r.exploded, "exploded"),
             (r.max_inverted_elements > 0, "inverted cells"),

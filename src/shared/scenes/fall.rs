@@ -130,7 +130,24 @@ impl FallScene {
     /// Runs the scene, calling `observe` after every step with the world and the fraction done.
     pub fn run_with(
         &self,
+        observe: impl FnMut(&DeformableWorld, f64),
+    ) -> Result<Record, BuildError> {
+        self.run_inner(observe, None)
+    }
+
+    /// Runs the scene and samples the centre of mass every `every` seconds (from `every` on,
+    /// at the first step ending at or after each multiple) — the trajectory that
+    /// [`super::metrics::trajectory_error`] compares across dt and resolution.
+    pub fn run_sampled(&self, every: Real) -> Result<(Record, Vec<Vector>), BuildError> {
+        let mut samples = Vec::new();
+        let r = self.run_inner(|_, _| {}, Some((every, &mut samples)))?;
+        Ok((r, samples))
+    }
+
+    fn run_inner(
+        &self,
         mut observe: impl FnMut(&DeformableWorld, f64),
+        mut sample: Option<(Real, &mut Vec<Vector>)>,
     ) -> Result<Record, BuildError> {
         let mut sim = self.sim()?;
         let steps = (self.seconds / self.dt).round().max(1.0) as usize;
@@ -153,6 +170,13 @@ impl FallScene {
                     if vy <= 0.0 {
                         apex = Some(highest);
                     }
+                }
+            }
+            if let Some((every, out)) = sample.as_mut() {
+                let t = (k + 1) as f64 * self.dt as f64;
+                let next = (out.len() + 1) as f64 * *every as f64;
+                if t >= next - 1e-9 * self.dt as f64 {
+                    out.push(sim.center_of_mass());
                 }
             }
             observe(&sim.world, (k + 1) as f64 / steps as f64);

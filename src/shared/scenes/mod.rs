@@ -20,6 +20,7 @@ mod crush;
 mod fall;
 mod limb;
 mod manipulator;
+pub mod metrics;
 mod rotation_error;
 mod sim;
 mod subject;

@@ -7,7 +7,7 @@ use super::super::attach::AttachError;
 use super::super::body::DeformableBuilder;
 use super::super::error::BuildError;
 use super::super::material::{Material, Stiffness};
-use super::super::math::{self, Real, Rotation, Vector, DIM, SIMPLEX_ARITY, UP};
+use super::super::math::{Real, Rotation, Vector, DIM, SIMPLEX_ARITY, UP};
 use super::super::mesh::{CellKind, Mesh};
 use super::super::rapier::dynamics::{RigidBodyHandle, SoftBodyBuilder, SoftBodyHandle};
 use super::super::rapier::geometry::ColliderBuilder;
@@ -437,26 +437,7 @@ impl Sim {
     /// Largest node distance from the rest shape moved by the best rigid fit (mass-weighted
     /// centroid, polar rotation of the covariance), over the body size.
     pub fn shape_error(&self) -> Real {
-        let m: Real = self.masses.iter().sum();
-        let c0 = self
-            .rest
-            .iter()
-            .zip(&self.masses)
-            .map(|(p, m)| *p * *m)
-            .sum::<Vector>()
-            / m;
-        let c = self.center_of_mass();
-        let mut a = math::outer(Vector::ZERO, Vector::ZERO);
-        for ((x, x0), m) in self.x.iter().zip(&self.rest).zip(&self.masses) {
-            a += math::outer((*x - c) * *m, *x0 - c0);
-        }
-        let r = math::polar_rotation(a);
-        self.x
-            .iter()
-            .zip(&self.rest)
-            .map(|(x, x0)| (*x - c - r * (*x0 - c0)).length())
-            .fold(0.0, Real::max)
-            / self.size
+        super::metrics::shape_error(&self.x, &self.rest, &self.masses, self.size)
     }
 
     /// A record with everything common to all scenes filled in.
