@@ -56,6 +56,8 @@ pub struct Record {
     pub substep_mode: String,
     /// Mean substeps per step (rapier: its solver substeps).
     pub substeps: f64,
+    /// Most substeps in one step.
+    pub max_substeps: usize,
     /// Simulated time, s.
     pub sim_s: f64,
     /// Wall time of the stepping loop only, s.

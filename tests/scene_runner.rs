@@ -18,6 +18,7 @@ const KEYS: &[(&str, &str)] = &[
     ("nodes", "u"),
     ("elements", "u"),
     ("dt", "f"),
+    ("max_substeps", "u"),
     ("substeps", "f"),
     ("substep_mode", "s"),
     ("sim_s", "f"),

@@ -175,6 +175,7 @@ pub fn to_json(r: &Record) -> Value {
         "dt": r.dt,
         "substep_mode": r.substep_mode,
         "substeps": r.substeps,
+        "max_substeps": r.max_substeps,
         "sim_s": r.sim_s,
         "wall_s": r.wall_s,
         "wall_per_sim_s": r.wall_per_sim_s(),

@@ -43,10 +43,11 @@ pub struct PipelineSettings {
     pub fixed_substeps: Option<usize>,
     /// Approach speeds below this (m/s) give a resting contact, not a bounce (default 0.1).
     pub restitution_threshold: Real,
-    /// A body whose every node is slower than this (m/s) is still (default 0.01 m/s).
+    /// A body whose every free node is slower than this (m/s) is still (default 0.05 m/s,
+    /// rapier 0.36's default `normalized_linear_threshold` at unit length).
     pub sleep_speed: Real,
     /// A body still this long (s), with no bone it is bound to moving and no moving or awake
-    /// dynamic body near it, falls asleep (default 2 s, rapier's `time_until_sleep`).
+    /// dynamic body near it, falls asleep (default 0.5 s, rapier 0.36's `time_until_sleep`).
     pub time_until_sleep: Real,
 }
 
@@ -57,8 +58,8 @@ impl Default for PipelineSettings {
             max_substeps: 20_000,
             fixed_substeps: None,
             restitution_threshold: 0.1,
-            sleep_speed: 0.01,
-            time_until_sleep: 2.0,
+            sleep_speed: 0.05,
+            time_until_sleep: 0.5,
         }
     }
 }

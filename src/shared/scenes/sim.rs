@@ -89,6 +89,7 @@ pub struct Sim {
     fixed_substeps: Option<usize>,
     steps: usize,
     substeps: usize,
+    max_substeps: usize,
     wall: f64,
     inverted: usize,
     max_inverted: usize,
@@ -218,6 +219,7 @@ impl Sim {
             fixed_substeps,
             steps: 0,
             substeps: 0,
+            max_substeps: 0,
             wall: 0.0,
             inverted: 0,
             max_inverted: 0,
@@ -280,14 +282,17 @@ impl Sim {
             Soft::Sinew(h) => {
                 let r = report.get(h).cloned().unwrap_or_default();
                 self.substeps += r.substeps;
+                self.max_substeps = self.max_substeps.max(r.substeps);
                 self.nan |= r.non_finite;
             }
             Soft::Rapier(_) => {
-                self.substeps += self
+                let iterations = self
                     .world
                     .physics
                     .integration_parameters
                     .num_solver_iterations;
+                self.substeps += iterations;
+                self.max_substeps = self.max_substeps.max(iterations);
             }
         }
         self.read_back();
@@ -459,6 +464,7 @@ impl Sim {
             }
             .to_string(),
             substeps: self.substeps as f64 / self.steps.max(1) as f64,
+            max_substeps: self.max_substeps,
             sim_s: self.world.time() as f64,
             wall_s: self.wall,
             young: self.material.young_modulus as f64,
