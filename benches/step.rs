@@ -2,14 +2,17 @@
 //! resolutions 5, 9, 17 and 33 nodes per edge (up to 32³·5 = 163 840 tetrahedra), for each of
 //! sinew's element models and rapier's own soft-body models on the same mesh.
 //!
-//! Two groups per dimension:
+//! Three groups per dimension:
 //! - `fall_step_{2d,3d}`: one 1 ms step, each solver choosing its own substeps (sinew: from
 //!   the stability bound; rapier: its defaults, 4 solver iterations). Throughput is elements,
 //!   so criterion's `elem/s` is element-steps per second at equal dt.
+//! - `element_forces_{2d,3d}`: sinew's models only, one evaluation of every element's force
+//!   on the settled box (`Deformable::element_forces`): the force law alone, the comparison
+//!   the shape-based paper makes ("1.05 times the cost of a spring element").
 //! - `element_update_{2d,3d}`: sinew's models only, one step of exactly one substep, with dt
 //!   small enough for every model to be stable (`0.4 ms / (res − 1)`). Throughput is elements,
-//!   so `elem/s` is element-updates per second: the same work for every model, the comparison
-//!   the shape-based paper makes ("1.05 times the cost of a spring element").
+//!   so `elem/s` is element-updates per second: the same work for every model, contacts and
+//!   the step's diagnostics included.
 //!
 //! ```text
 //! cargo bench --bench step                          # everything (~30 min)
@@ -94,6 +97,32 @@ macro_rules! bench_dimension {
                 group.bench_with_input(BenchmarkId::new(subject.name(), res), &res, |b, _| {
                     let world = world.get_or_insert_with(|| settled(&scene));
                     b.iter(|| world.step().wall_time)
+                });
+            }
+        }
+        group.finish();
+
+        let mut group = $c.benchmark_group(concat!("element_forces_", $label));
+        group.sample_size(20);
+        group.warm_up_time(Duration::from_millis(500));
+        group.measurement_time(Duration::from_secs(2));
+        for &res in &resolutions {
+            for subject in Subject::all() {
+                if !matches!(subject, Subject::Sinew(_)) {
+                    continue;
+                }
+                let scene = FallScene {
+                    subject,
+                    resolution: res,
+                    drop_height: 0.0,
+                    ..FallScene::default()
+                };
+                group.throughput(Throughput::Elements(elements(res)));
+                let mut world = None;
+                group.bench_with_input(BenchmarkId::new(subject.name(), res), &res, |b, _| {
+                    let world = world.get_or_insert_with(|| settled(&scene));
+                    let (_, body) = world.deformables.iter_mut().next().expect("one body");
+                    b.iter(|| body.element_forces()[0])
                 });
             }
         }
