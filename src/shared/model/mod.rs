@@ -10,6 +10,18 @@
 //! stiffness and damping it feels (`Σ_j ‖K_ij‖`, `Σ_j ‖C_ij‖`). The pipeline turns these into
 //! the largest stable substep of symplectic Euler (`h < 2/ω`), recomputed every substep so that
 //! the edge-repulsion barrier, which stiffens as an element compresses, is always covered.
+//! The parts of these bounds that do not change with the state (all damping; the stiffness of
+//! linear springs, centroid springs and shape-based cells) are summed once per node when the
+//! model is built (`NodeBounds`); a step adds them with one pass over the nodes and only
+//! the barrier-like terms (nonlinear springs, ER repulsion) add stiffness per term.
+//!
+//! # Layout and cost
+//!
+//! Rest data is flat, one array per quantity (struct of arrays), indexed by term: springs by
+//! spring, cell terms by *slot* `cell · n + a` (the layout of [`Mesh::cell_indices`]). Cell
+//! loops are compiled once per cell arity (`SIMPLEX_ARITY`, the cube arity), so a cell's
+//! vertices, rest data and outputs are fixed-size arrays and the inner loops unroll without
+//! bounds checks. A step allocates nothing.
 
 pub mod centroid_springs;
 pub mod edge_repulsion;
@@ -125,14 +137,48 @@ impl Accumulator {
     }
 }
 
+/// The parts of each node's stiffness and damping bounds that do not depend on the state,
+/// summed once at build time.
+#[derive(Clone, Debug)]
+pub(crate) struct NodeBounds {
+    pub stiffness: Vec<Real>,
+    pub damping: Vec<Real>,
+}
+
+impl NodeBounds {
+    fn new(nodes: usize) -> Self {
+        NodeBounds {
+            stiffness: vec![0.0; nodes],
+            damping: vec![0.0; nodes],
+        }
+    }
+
+    /// Adds the bounds into `acc` (one vectorisable pass per array).
+    fn add_to(&self, acc: &mut Accumulator) {
+        for (a, b) in acc.stiffness.iter_mut().zip(&self.stiffness) {
+            *a += *b;
+        }
+        for (a, b) in acc.damping.iter_mut().zip(&self.damping) {
+            *a += *b;
+        }
+    }
+}
+
 /// The built, model-specific element data (rest data and any per-cell state).
 #[derive(Clone, Debug)]
-pub(crate) enum ModelState {
+pub(crate) enum Elements {
     Springs(springs::Springs),
     CentroidSprings(centroid_springs::CentroidSprings),
     NonlinearSprings(springs::Springs),
     EdgeRepulsion(edge_repulsion::EdgeRepulsion),
     ShapeMatching(shape_matching::ShapeMatching),
+}
+
+/// A deformable's element model: its terms and the constant part of its node bounds.
+#[derive(Clone, Debug)]
+pub(crate) struct ModelState {
+    elements: Elements,
+    bounds: NodeBounds,
 }
 
 impl ModelState {
@@ -143,26 +189,24 @@ impl ModelState {
         params: &Resolved,
         initial_rotation: Rotation,
     ) -> Result<Self, BuildError> {
-        Ok(match model {
-            ElementModel::Springs => ModelState::Springs(springs::Springs::build(
+        let elements = match model {
+            ElementModel::Springs => Elements::Springs(springs::Springs::build(
                 mesh,
                 masses,
                 params,
                 springs::MATERIAL_SCALE,
                 springs::Law::Linear,
             )),
-            ElementModel::CentroidSprings => ModelState::CentroidSprings(
+            ElementModel::CentroidSprings => Elements::CentroidSprings(
                 centroid_springs::CentroidSprings::build(mesh, masses, params),
             ),
-            ElementModel::NonlinearSprings => {
-                ModelState::NonlinearSprings(springs::Springs::build(
-                    mesh,
-                    masses,
-                    params,
-                    nonlinear_springs::MATERIAL_SCALE,
-                    springs::Law::Nonlinear,
-                ))
-            }
+            ElementModel::NonlinearSprings => Elements::NonlinearSprings(springs::Springs::build(
+                mesh,
+                masses,
+                params,
+                nonlinear_springs::MATERIAL_SCALE,
+                springs::Law::Nonlinear,
+            )),
             ElementModel::EdgeRepulsion => {
                 if mesh.kind() != CellKind::Simplex {
                     return Err(BuildError::UnsupportedCells {
@@ -170,9 +214,7 @@ impl ModelState {
                         kind: mesh.kind().name(),
                     });
                 }
-                ModelState::EdgeRepulsion(edge_repulsion::EdgeRepulsion::build(
-                    mesh, masses, params,
-                ))
+                Elements::EdgeRepulsion(edge_repulsion::EdgeRepulsion::build(mesh, masses, params))
             }
             ElementModel::ShapeMatching { fit, damping } => {
                 if let RotationFit::Iterative(0) = fit {
@@ -182,7 +224,7 @@ impl ModelState {
                         expected: "at least one iteration",
                     });
                 }
-                ModelState::ShapeMatching(shape_matching::ShapeMatching::build(
+                Elements::ShapeMatching(shape_matching::ShapeMatching::build(
                     mesh,
                     params,
                     fit,
@@ -190,23 +232,29 @@ impl ModelState {
                     initial_rotation,
                 ))
             }
-        })
+        };
+        let mut bounds = NodeBounds::new(mesh.nodes().len());
+        elements.constant_bounds(&mut bounds);
+        Ok(ModelState { elements, bounds })
     }
 
     /// Adds element forces at `(x, v)` into `acc`; returns the largest substep the model's
     /// own limiter allows (infinite when it has none).
     pub fn accumulate(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
-        match self {
-            ModelState::Springs(s) | ModelState::NonlinearSprings(s) => {
+        assert!(v.len() == x.len() && acc.force.len() == x.len());
+        assert!(acc.stiffness.len() == x.len() && acc.damping.len() == x.len());
+        self.bounds.add_to(acc);
+        match &mut self.elements {
+            Elements::Springs(s) | Elements::NonlinearSprings(s) => {
                 s.accumulate(x, v, acc);
                 Real::INFINITY
             }
-            ModelState::CentroidSprings(s) => {
+            Elements::CentroidSprings(s) => {
                 s.accumulate(x, v, acc);
                 Real::INFINITY
             }
-            ModelState::EdgeRepulsion(s) => s.accumulate(x, v, acc),
-            ModelState::ShapeMatching(s) => {
+            Elements::EdgeRepulsion(s) => s.accumulate(x, v, acc),
+            Elements::ShapeMatching(s) => {
                 s.accumulate(x, v, acc);
                 Real::INFINITY
             }
@@ -215,11 +263,23 @@ impl ModelState {
 
     /// Elastic (stored) energy at `x`.
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
+        match &self.elements {
+            Elements::Springs(s) | Elements::NonlinearSprings(s) => s.elastic_energy(x),
+            Elements::CentroidSprings(s) => s.elastic_energy(x),
+            Elements::EdgeRepulsion(s) => s.elastic_energy(x),
+            Elements::ShapeMatching(s) => s.elastic_energy(x),
+        }
+    }
+}
+
+impl Elements {
+    /// Adds every term's state-independent bounds into `bounds`.
+    fn constant_bounds(&self, bounds: &mut NodeBounds) {
         match self {
-            ModelState::Springs(s) | ModelState::NonlinearSprings(s) => s.elastic_energy(x),
-            ModelState::CentroidSprings(s) => s.elastic_energy(x),
-            ModelState::EdgeRepulsion(s) => s.elastic_energy(x),
-            ModelState::ShapeMatching(s) => s.elastic_energy(x),
+            Elements::Springs(s) | Elements::NonlinearSprings(s) => s.constant_bounds(bounds),
+            Elements::CentroidSprings(s) => s.constant_bounds(bounds),
+            Elements::EdgeRepulsion(s) => s.constant_bounds(bounds),
+            Elements::ShapeMatching(s) => s.constant_bounds(bounds),
         }
     }
 }

@@ -23,7 +23,7 @@
 use super::super::material::Resolved;
 use super::super::math::{Real, Vector};
 use super::super::mesh::Mesh;
-use super::{reduced_mass, Accumulator};
+use super::{reduced_mass, Accumulator, NodeBounds};
 
 /// Calibration constant `s` of the material mapping `k = s E V_s / L0²`.
 pub const MATERIAL_SCALE: Real = 5.8;
@@ -92,22 +92,50 @@ impl Springs {
         out
     }
 
-    pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+    /// Adds the bounds that do not change with the state: each spring is a rank-one term with
+    /// weights `(1, −1)`, so it adds `2c` to both nodes' damping rows and, for the linear law,
+    /// `2k` to their stiffness rows.
+    pub fn constant_bounds(&self, bounds: &mut NodeBounds) {
         for s in 0..self.pairs.len() {
             let [i, j] = self.pairs[s];
             let (i, j) = (i as usize, j as usize);
-            let (l0, k, c) = (self.rest[s], self.k[s], self.c[s]);
-            let (f, k_eff) = match self.law {
-                Law::Linear => (linear_force(x[i], x[j], v[i], v[j], l0, k, c), k),
-                Law::Nonlinear => super::nonlinear_springs::force(x[i], x[j], v[i], v[j], l0, k, c),
-            };
-            acc.force[i] += f;
-            acc.force[j] -= f;
-            // Rank-one term with weights (1, −1): each row sums to 2k (2c).
-            acc.stiffness[i] += 2.0 * k_eff;
-            acc.stiffness[j] += 2.0 * k_eff;
-            acc.damping[i] += 2.0 * c;
-            acc.damping[j] += 2.0 * c;
+            if self.law == Law::Linear {
+                bounds.stiffness[i] += 2.0 * self.k[s];
+                bounds.stiffness[j] += 2.0 * self.k[s];
+            }
+            bounds.damping[i] += 2.0 * self.c[s];
+            bounds.damping[j] += 2.0 * self.c[s];
+        }
+    }
+
+    /// Adds the spring forces (and, for the nonlinear law, the stiffness that changes with the
+    /// length) into `acc`. The constant bounds are added by [`Springs::constant_bounds`].
+    pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+        match self.law {
+            Law::Linear => self.accumulate_law::<false>(x, v, acc),
+            Law::Nonlinear => self.accumulate_law::<true>(x, v, acc),
+        }
+    }
+
+    fn accumulate_law<const NONLINEAR: bool>(
+        &self,
+        x: &[Vector],
+        v: &[Vector],
+        acc: &mut Accumulator,
+    ) {
+        // Equal lengths let one bounds check per index cover every array.
+        let n = x.len();
+        let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
+        let terms = self.pairs.iter().zip(&self.rest).zip(&self.k).zip(&self.c);
+        for (((&[i, j], &l0), &k), &c) in terms {
+            let (f, k_row) = term::<NONLINEAR>([i, j], l0, k, c, x, v);
+            let (i, j) = (i as usize, j as usize);
+            force[i] += f;
+            force[j] -= f;
+            if NONLINEAR {
+                stiffness[i] += k_row;
+                stiffness[j] += k_row;
+            }
         }
     }
 
@@ -122,5 +150,25 @@ impl Springs {
             };
         }
         e
+    }
+}
+
+/// One spring: the force on its first node and, for the nonlinear law, the row bound `2 k_eff`
+/// of its current axial stiffness (the linear law's bound is constant).
+#[inline(always)]
+fn term<const NONLINEAR: bool>(
+    [i, j]: [u32; 2],
+    l0: Real,
+    k: Real,
+    c: Real,
+    x: &[Vector],
+    v: &[Vector],
+) -> (Vector, Real) {
+    let (i, j) = (i as usize, j as usize);
+    if NONLINEAR {
+        let (f, k_eff) = super::nonlinear_springs::force(x[i], x[j], v[i], v[j], l0, k, c);
+        (f, 2.0 * k_eff)
+    } else {
+        (linear_force(x[i], x[j], v[i], v[j], l0, k, c), 0.0)
     }
 }
