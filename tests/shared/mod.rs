@@ -6,6 +6,7 @@ mod elements;
 mod errors;
 mod fall;
 mod mesh;
+mod parallel;
 mod pipeline;
 mod scenes;
 mod support;

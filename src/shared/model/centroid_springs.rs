@@ -124,7 +124,7 @@ impl CentroidSprings {
     fn accumulate_cells<const N: usize>(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
         let n = x.len();
         let (v, force) = (&v[..n], &mut acc.force[..n]);
-        for (((ids, rest), k), c) in self.cell_data::<N>() {
+        for (((ids, rest), k), c) in self.cell_data::<N>(0) {
             let f = cell_forces(ids, rest, k, c, x, v);
             for a in 0..N {
                 force[ids[a] as usize] += f[a];
@@ -132,16 +132,45 @@ impl CentroidSprings {
         }
     }
 
-    /// Per cell: its vertex indices and its per-vertex rest distance, stiffness and damping.
+    /// Writes each cell's force on each of its vertices into `force` (one entry per slot), on
+    /// rayon's threads.
+    #[cfg(feature = "parallel")]
+    pub fn evaluate_cells(&self, x: &[Vector], v: &[Vector], force: &mut [Vector]) {
+        match self.kind {
+            CellKind::Simplex => self.evaluate_cells_n::<SIMPLEX_ARITY>(x, v, force),
+            CellKind::Cube => self.evaluate_cells_n::<CUBE_ARITY>(x, v, force),
+        }
+    }
+
+    #[cfg(feature = "parallel")]
+    fn evaluate_cells_n<const N: usize>(&self, x: &[Vector], v: &[Vector], force: &mut [Vector]) {
+        use super::parallel::CELLS_PER_TASK as CHUNK;
+        use rayon::prelude::*;
+        let v = &v[..x.len()];
+        let (out, _) = force.as_chunks_mut::<N>();
+        out.par_chunks_mut(CHUNK).enumerate().for_each(|(t, out)| {
+            for (f, (((ids, rest), k), c)) in out.iter_mut().zip(self.cell_data::<N>(t * CHUNK)) {
+                *f = cell_forces(ids, rest, k, c, x, v);
+            }
+        });
+    }
+
+    /// From cell `first` on, per cell: its vertex indices and its per-vertex rest distance,
+    /// stiffness and damping.
     #[allow(clippy::type_complexity)]
     fn cell_data<const N: usize>(
         &self,
+        first: usize,
     ) -> impl Iterator<Item = (((&[u32; N], &[Real; N]), &[Real; N]), &[Real; N])> {
         let (cells, _) = self.cells.as_chunks::<N>();
         let (rest, _) = self.rest.as_chunks::<N>();
         let (k, _) = self.k.as_chunks::<N>();
         let (c, _) = self.c.as_chunks::<N>();
-        cells.iter().zip(rest).zip(k).zip(c)
+        cells[first..]
+            .iter()
+            .zip(&rest[first..])
+            .zip(&k[first..])
+            .zip(&c[first..])
     }
 
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {

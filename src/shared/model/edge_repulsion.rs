@@ -184,7 +184,7 @@ impl EdgeRepulsion {
         let n = x.len();
         let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
         let mut limit = Real::INFINITY;
-        for (((ids, side), h0), k) in self.cell_data() {
+        for (((ids, side), h0), k) in self.cell_data(0) {
             let (f, k_row, cell_limit) = cell_terms(ids, side, h0, k, x, v);
             for a in 0..SIMPLEX_ARITY {
                 let i = ids[a] as usize;
@@ -196,11 +196,45 @@ impl EdgeRepulsion {
         limit
     }
 
-    /// Per cell: its vertex indices and, per vertex, the side sign, rest height and
-    /// stiffness of its repulsion.
+    /// Writes each cell's repulsion force and stiffness bound on each of its vertices into
+    /// `force` and `stiffness` (one entry per slot), on rayon's threads; returns the crossing
+    /// limiter.
+    #[cfg(feature = "parallel")]
+    pub fn evaluate_cells(
+        &self,
+        x: &[Vector],
+        v: &[Vector],
+        force: &mut [Vector],
+        stiffness: &mut [Real],
+    ) -> Real {
+        use super::parallel::CELLS_PER_TASK as CHUNK;
+        use rayon::prelude::*;
+        let v = &v[..x.len()];
+        let (force, _) = force.as_chunks_mut::<SIMPLEX_ARITY>();
+        let (stiffness, _) = stiffness.as_chunks_mut::<SIMPLEX_ARITY>();
+        force
+            .par_chunks_mut(CHUNK)
+            .zip(stiffness.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(t, (force, stiffness))| {
+                let mut limit = Real::INFINITY;
+                let out = force.iter_mut().zip(stiffness);
+                for ((f, k_row), (((ids, side), h0), k)) in out.zip(self.cell_data(t * CHUNK)) {
+                    let cell_limit;
+                    (*f, *k_row, cell_limit) = cell_terms(ids, side, h0, k, x, v);
+                    limit = limit.min(cell_limit);
+                }
+                limit
+            })
+            .reduce(|| Real::INFINITY, Real::min)
+    }
+
+    /// From cell `first` on, per cell: its vertex indices and, per vertex, the side sign, rest
+    /// height and stiffness of its repulsion.
     #[allow(clippy::type_complexity)]
     fn cell_data(
         &self,
+        first: usize,
     ) -> impl Iterator<
         Item = (
             (
@@ -214,7 +248,11 @@ impl EdgeRepulsion {
         let (side, _) = self.side.as_chunks::<SIMPLEX_ARITY>();
         let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
         let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
-        cells.iter().zip(side).zip(h0).zip(k)
+        cells[first..]
+            .iter()
+            .zip(&side[first..])
+            .zip(&h0[first..])
+            .zip(&k[first..])
     }
 
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {

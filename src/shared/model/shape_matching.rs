@@ -191,6 +191,44 @@ impl ShapeMatching {
         }
     }
 
+    /// Writes each cell's force on each of its vertices into `force` (one entry per slot) and
+    /// advances the cells' rotations, on rayon's threads.
+    #[cfg(feature = "parallel")]
+    pub fn evaluate_cells(&mut self, x: &[Vector], v: &[Vector], force: &mut [Vector]) {
+        match self.kind {
+            CellKind::Simplex => self.evaluate_cells_n::<SIMPLEX_ARITY>(x, v, force),
+            CellKind::Cube => self.evaluate_cells_n::<CUBE_ARITY>(x, v, force),
+        }
+    }
+
+    #[cfg(feature = "parallel")]
+    fn evaluate_cells_n<const N: usize>(
+        &mut self,
+        x: &[Vector],
+        v: &[Vector],
+        force: &mut [Vector],
+    ) {
+        use super::parallel::CELLS_PER_TASK as CHUNK;
+        use rayon::prelude::*;
+        let v = &v[..x.len()];
+        let (fit, damping) = (self.fit, self.damping);
+        let (cells, _) = self.cells.as_chunks::<N>();
+        let (rest, _) = self.rest.as_chunks::<N>();
+        let (k, c) = (&self.k, &self.c);
+        let (out, _) = force.as_chunks_mut::<N>();
+        out.par_chunks_mut(CHUNK)
+            .zip(self.rotations.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(t, (out, rotations))| {
+                let first = t * CHUNK;
+                let terms = cells[first..].iter().zip(&rest[first..]);
+                let terms = terms.zip(&k[first..]).zip(&c[first..]);
+                for ((f, q), (((ids, rest), &k), &c)) in out.iter_mut().zip(rotations).zip(terms) {
+                    (*f, *q) = cell_forces(ids, rest, k, c, fit, damping, *q, x, v);
+                }
+            });
+    }
+
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
         let n = self.arity;
         let mut e = 0.0;

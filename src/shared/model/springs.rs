@@ -126,8 +126,7 @@ impl Springs {
         // Equal lengths let one bounds check per index cover every array.
         let n = x.len();
         let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
-        let terms = self.pairs.iter().zip(&self.rest).zip(&self.k).zip(&self.c);
-        for (((&[i, j], &l0), &k), &c) in terms {
+        for (((&[i, j], &l0), &k), &c) in self.terms(0) {
             let (f, k_row) = term::<NONLINEAR>([i, j], l0, k, c, x, v);
             let (i, j) = (i as usize, j as usize);
             force[i] += f;
@@ -137,6 +136,56 @@ impl Springs {
                 stiffness[j] += k_row;
             }
         }
+    }
+
+    /// Writes each spring's forces on its two nodes (`[f, −f]`) into `force` and, for the
+    /// nonlinear law, its row bound on both into `stiffness` (ignored for the linear law), on
+    /// rayon's threads.
+    #[cfg(feature = "parallel")]
+    pub fn evaluate(
+        &self,
+        x: &[Vector],
+        v: &[Vector],
+        force: &mut [[Vector; 2]],
+        stiffness: &mut [[Real; 2]],
+    ) {
+        use super::parallel::TERMS_PER_TASK as CHUNK;
+        use rayon::prelude::*;
+        let v = &v[..x.len()];
+        match self.law {
+            Law::Linear => force
+                .par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(t, force)| {
+                    for (f, (((&pair, &l0), &k), &c)) in force.iter_mut().zip(self.terms(t * CHUNK))
+                    {
+                        let (fi, _) = term::<false>(pair, l0, k, c, x, v);
+                        *f = [fi, -fi];
+                    }
+                }),
+            Law::Nonlinear => force
+                .par_chunks_mut(CHUNK)
+                .zip(stiffness.par_chunks_mut(CHUNK))
+                .enumerate()
+                .for_each(|(t, (force, stiffness))| {
+                    let out = force.iter_mut().zip(stiffness);
+                    for ((f, k_row), (((&pair, &l0), &k), &c)) in out.zip(self.terms(t * CHUNK)) {
+                        let (fi, ki) = term::<true>(pair, l0, k, c, x, v);
+                        (*f, *k_row) = ([fi, -fi], [ki, ki]);
+                    }
+                }),
+        }
+    }
+
+    /// The springs from `first` on: node pair, rest length, stiffness, damping.
+    #[allow(clippy::type_complexity)]
+    fn terms(&self, first: usize) -> impl Iterator<Item = (((&[u32; 2], &Real), &Real), &Real)> {
+        let pairs = &self.pairs[first..];
+        pairs
+            .iter()
+            .zip(&self.rest[first..])
+            .zip(&self.k[first..])
+            .zip(&self.c[first..])
     }
 
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
