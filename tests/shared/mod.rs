@@ -7,6 +7,7 @@ mod errors;
 mod fall;
 mod mesh;
 mod metrics;
+mod parallel;
 mod pipeline;
 mod scenes;
 mod sleep;

@@ -18,18 +18,20 @@
 //! `k_c = s E (V_cell/n) / L0²` with the same `s`, `c_c = 2 ζ √(k_c m_cell/n)`.
 
 use super::super::material::Resolved;
+use super::super::math::SIMPLEX_ARITY;
 use super::super::math::{Real, Vector};
-use super::super::mesh::Mesh;
+use super::super::mesh::{CellKind, Mesh};
 use super::springs::{Law, Springs, MATERIAL_SCALE};
-use super::Accumulator;
+use super::{Accumulator, NodeBounds};
 
-/// Largest cell arity (hexahedron).
-const MAX_ARITY: usize = 8;
+/// Vertices of a cube cell.
+const CUBE_ARITY: usize = CellKind::Cube.arity();
 
 /// Edge springs plus centroid springs.
 #[derive(Clone, Debug)]
 pub(crate) struct CentroidSprings {
-    edges: Springs,
+    pub edges: Springs,
+    kind: CellKind,
     arity: usize,
     cells: Vec<u32>,
     /// Per cell vertex: rest distance to the centroid, stiffness, damping.
@@ -60,6 +62,7 @@ impl CentroidSprings {
         let nodes = mesh.nodes();
         let mut out = CentroidSprings {
             edges,
+            kind: mesh.kind(),
             arity,
             cells: mesh.cell_indices().to_vec(),
             rest: Vec::new(),
@@ -84,49 +87,90 @@ impl CentroidSprings {
         out
     }
 
-    pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
-        self.edges.accumulate(x, v, acc);
+    /// Adds the state-independent bounds of edges and centroid springs. A centroid spring is
+    /// a rank-one term with weights `1 − 1/n` at its vertex and `−1/n` at the others: its rows
+    /// sum to `2k(1 − 1/n)` at the vertex and `2k/n` elsewhere.
+    pub fn constant_bounds(&self, bounds: &mut NodeBounds) {
+        self.edges.constant_bounds(bounds);
         let n = self.arity;
         let inv_n = 1.0 / n as Real;
+        let w = 2.0 * (1.0 - inv_n);
         for (cell, ids) in self.cells.chunks_exact(n).enumerate() {
-            let mut xc = Vector::ZERO;
-            let mut vc = Vector::ZERO;
-            for &i in ids {
-                xc += x[i as usize];
-                vc += v[i as usize];
-            }
-            xc *= inv_n;
-            vc *= inv_n;
-            let mut reaction = Vector::ZERO;
             let mut k_sum = 0.0;
             let mut c_sum = 0.0;
-            let mut own = [Vector::ZERO; MAX_ARITY];
             for (a, &i) in ids.iter().enumerate() {
                 let s = cell * n + a;
-                let f = centroid_force(
-                    x[i as usize],
-                    xc,
-                    v[i as usize],
-                    vc,
-                    self.rest[s],
-                    self.k[s],
-                    self.c[s],
-                );
-                own[a] = f;
-                reaction += f;
                 k_sum += self.k[s];
                 c_sum += self.c[s];
-                // Row bound of the rank-one term with weights (1 − 1/n at i, −1/n elsewhere).
-                let w = 2.0 * (1.0 - inv_n);
-                acc.stiffness[i as usize] += self.k[s] * w;
-                acc.damping[i as usize] += self.c[s] * w;
+                bounds.stiffness[i as usize] += self.k[s] * w;
+                bounds.damping[i as usize] += self.c[s] * w;
             }
-            for (a, &i) in ids.iter().enumerate() {
-                acc.force[i as usize] += own[a] - reaction * inv_n;
-                acc.stiffness[i as usize] += k_sum * 2.0 * inv_n;
-                acc.damping[i as usize] += c_sum * 2.0 * inv_n;
+            for &i in ids {
+                bounds.stiffness[i as usize] += k_sum * 2.0 * inv_n;
+                bounds.damping[i as usize] += c_sum * 2.0 * inv_n;
             }
         }
+    }
+
+    /// Adds the forces of edges and centroid springs into `acc`.
+    pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+        self.edges.accumulate(x, v, acc);
+        match self.kind {
+            CellKind::Simplex => self.accumulate_cells::<SIMPLEX_ARITY>(x, v, acc),
+            CellKind::Cube => self.accumulate_cells::<CUBE_ARITY>(x, v, acc),
+        }
+    }
+
+    fn accumulate_cells<const N: usize>(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+        let n = x.len();
+        let (v, force) = (&v[..n], &mut acc.force[..n]);
+        for (((ids, rest), k), c) in self.cell_data::<N>(0) {
+            let f = cell_forces(ids, rest, k, c, x, v);
+            for a in 0..N {
+                force[ids[a] as usize] += f[a];
+            }
+        }
+    }
+
+    /// Writes each cell's force on each of its vertices into `force` (one entry per slot), on
+    /// rayon's threads.
+    #[cfg(feature = "parallel")]
+    pub fn evaluate_cells(&self, x: &[Vector], v: &[Vector], force: &mut [Vector]) {
+        match self.kind {
+            CellKind::Simplex => self.evaluate_cells_n::<SIMPLEX_ARITY>(x, v, force),
+            CellKind::Cube => self.evaluate_cells_n::<CUBE_ARITY>(x, v, force),
+        }
+    }
+
+    #[cfg(feature = "parallel")]
+    fn evaluate_cells_n<const N: usize>(&self, x: &[Vector], v: &[Vector], force: &mut [Vector]) {
+        use super::parallel::CELLS_PER_TASK as CHUNK;
+        use rayon::prelude::*;
+        let v = &v[..x.len()];
+        let (out, _) = force.as_chunks_mut::<N>();
+        out.par_chunks_mut(CHUNK).enumerate().for_each(|(t, out)| {
+            for (f, (((ids, rest), k), c)) in out.iter_mut().zip(self.cell_data::<N>(t * CHUNK)) {
+                *f = cell_forces(ids, rest, k, c, x, v);
+            }
+        });
+    }
+
+    /// From cell `first` on, per cell: its vertex indices and its per-vertex rest distance,
+    /// stiffness and damping.
+    #[allow(clippy::type_complexity)]
+    fn cell_data<const N: usize>(
+        &self,
+        first: usize,
+    ) -> impl Iterator<Item = (((&[u32; N], &[Real; N]), &[Real; N]), &[Real; N])> {
+        let (cells, _) = self.cells.as_chunks::<N>();
+        let (rest, _) = self.rest.as_chunks::<N>();
+        let (k, _) = self.k.as_chunks::<N>();
+        let (c, _) = self.c.as_chunks::<N>();
+        cells[first..]
+            .iter()
+            .zip(&rest[first..])
+            .zip(&k[first..])
+            .zip(&c[first..])
     }
 
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
@@ -141,4 +185,35 @@ impl CentroidSprings {
         }
         e
     }
+}
+
+/// The centroid springs of one cell: the force on each vertex, its own spring's pull plus its
+/// `1/n` share of every spring's reaction on the centroid.
+#[inline(always)]
+fn cell_forces<const N: usize>(
+    ids: &[u32; N],
+    rest: &[Real; N],
+    k: &[Real; N],
+    c: &[Real; N],
+    x: &[Vector],
+    v: &[Vector],
+) -> [Vector; N] {
+    let inv_n = 1.0 / N as Real;
+    let xs = ids.map(|i| x[i as usize]);
+    let vs = ids.map(|i| v[i as usize]);
+    let mut xc = Vector::ZERO;
+    let mut vc = Vector::ZERO;
+    for a in 0..N {
+        xc += xs[a];
+        vc += vs[a];
+    }
+    xc *= inv_n;
+    vc *= inv_n;
+    let mut reaction = Vector::ZERO;
+    let mut own = [Vector::ZERO; N];
+    for a in 0..N {
+        own[a] = centroid_force(xs[a], xc, vs[a], vc, rest[a], k[a], c[a]);
+        reaction += own[a];
+    }
+    own.map(|f| f - reaction * inv_n)
 }

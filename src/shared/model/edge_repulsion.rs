@@ -36,7 +36,7 @@ use super::super::material::Resolved;
 use super::super::math::{self, Real, Vector, FACET_ARITY, SIMPLEX_ARITY};
 use super::super::mesh::Mesh;
 use super::springs::{Law, Springs};
-use super::Accumulator;
+use super::{Accumulator, NodeBounds};
 
 /// Calibration constant `s` of the ER material mapping.
 pub const MATERIAL_SCALE: Real = 1.0;
@@ -101,7 +101,7 @@ pub fn repulsion(c: Vector, facet: &[Vector], side: Real, h0: Real, k: Real) -> 
 /// ER elements on simplex cells.
 #[derive(Clone, Debug)]
 pub(crate) struct EdgeRepulsion {
-    edges: Springs,
+    pub edges: Springs,
     cells: Vec<u32>,
     /// Per cell vertex: rest height, side sign, repulsion stiffness.
     h0: Vec<Real>,
@@ -110,17 +110,30 @@ pub(crate) struct EdgeRepulsion {
 }
 
 /// Local indices of the facet opposite each vertex, in increasing order.
-fn opposite(a: usize) -> [usize; FACET_ARITY] {
+const fn opposite(a: usize) -> [usize; FACET_ARITY] {
     let mut f = [0; FACET_ARITY];
     let mut n = 0;
-    for b in 0..SIMPLEX_ARITY {
+    let mut b = 0;
+    while b < SIMPLEX_ARITY {
         if b != a {
             f[n] = b;
             n += 1;
         }
+        b += 1;
     }
     f
 }
+
+/// [`opposite`] for every vertex.
+const OPPOSITE: [[usize; FACET_ARITY]; SIMPLEX_ARITY] = {
+    let mut t = [[0; FACET_ARITY]; SIMPLEX_ARITY];
+    let mut a = 0;
+    while a < SIMPLEX_ARITY {
+        t[a] = opposite(a);
+        a += 1;
+    }
+    t
+};
 
 impl EdgeRepulsion {
     pub fn build(mesh: &Mesh, masses: &[Real], params: &Resolved) -> Self {
@@ -137,7 +150,7 @@ impl EdgeRepulsion {
             let v = mesh.rest_volumes()[cell];
             let share = v / SIMPLEX_ARITY as Real;
             for a in 0..SIMPLEX_ARITY {
-                let f = opposite(a);
+                let f = OPPOSITE[a];
                 let facet: [Vector; FACET_ARITY] =
                     std::array::from_fn(|m| nodes[ids[f[m]] as usize]);
                 let normal = math::facet_normal(&facet);
@@ -158,42 +171,88 @@ impl EdgeRepulsion {
         out
     }
 
-    /// Adds forces; returns the largest substep the crossing limiter allows.
+    /// The edges' constant bounds (the repulsions' stiffness changes with the heights and only
+    /// the edges are damped).
+    pub fn constant_bounds(&self, bounds: &mut NodeBounds) {
+        self.edges.constant_bounds(bounds);
+    }
+
+    /// Adds forces and the repulsions' stiffness bounds; returns the largest substep the
+    /// crossing limiter allows.
     pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
         self.edges.accumulate(x, v, acc);
+        let n = x.len();
+        let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
         let mut limit = Real::INFINITY;
-        for (cell, ids) in self.cells.chunks_exact(SIMPLEX_ARITY).enumerate() {
+        for (((ids, side), h0), k) in self.cell_data(0) {
+            let (f, k_row, cell_limit) = cell_terms(ids, side, h0, k, x, v);
             for a in 0..SIMPLEX_ARITY {
-                let s = cell * SIMPLEX_ARITY + a;
-                let f = opposite(a);
-                let fid: [u32; FACET_ARITY] = std::array::from_fn(|m| ids[f[m]]);
-                let facet: [Vector; FACET_ARITY] = std::array::from_fn(|m| x[fid[m] as usize]);
-                let c = ids[a] as usize;
-                let r = repulsion(x[c], &facet, self.side[s], self.h0[s], self.k[s]);
-                let (force, w, h, k_eff) = (r.force, r.weights, r.height, r.stiffness);
-                acc.force[c] += force;
-                let mut foot_velocity = Vector::ZERO;
-                let mut wsum = 1.0;
-                for m in 0..FACET_ARITY {
-                    acc.force[fid[m] as usize] -= force * w[m];
-                    foot_velocity += v[fid[m] as usize] * w[m];
-                    wsum += w[m].abs();
-                }
-                // Gershgorin rows of the rank-one term k_eff a aᵀ, a = (1, −w).
-                acc.stiffness[c] += k_eff * wsum;
-                for m in 0..FACET_ARITY {
-                    acc.stiffness[fid[m] as usize] += k_eff * w[m].abs() * wsum;
-                }
-                // Crossing limiter.
-                if h > 0.0 {
-                    let rate = r.normal.dot(v[c] - foot_velocity);
-                    if rate < 0.0 {
-                        limit = limit.min(CROSSING_FRACTION * h / -rate);
-                    }
-                }
+                let i = ids[a] as usize;
+                force[i] += f[a];
+                stiffness[i] += k_row[a];
             }
+            limit = limit.min(cell_limit);
         }
         limit
+    }
+
+    /// Writes each cell's repulsion force and stiffness bound on each of its vertices into
+    /// `force` and `stiffness` (one entry per slot), on rayon's threads; returns the crossing
+    /// limiter.
+    #[cfg(feature = "parallel")]
+    pub fn evaluate_cells(
+        &self,
+        x: &[Vector],
+        v: &[Vector],
+        force: &mut [Vector],
+        stiffness: &mut [Real],
+    ) -> Real {
+        use super::parallel::CELLS_PER_TASK as CHUNK;
+        use rayon::prelude::*;
+        let v = &v[..x.len()];
+        let (force, _) = force.as_chunks_mut::<SIMPLEX_ARITY>();
+        let (stiffness, _) = stiffness.as_chunks_mut::<SIMPLEX_ARITY>();
+        force
+            .par_chunks_mut(CHUNK)
+            .zip(stiffness.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(t, (force, stiffness))| {
+                let mut limit = Real::INFINITY;
+                let out = force.iter_mut().zip(stiffness);
+                for ((f, k_row), (((ids, side), h0), k)) in out.zip(self.cell_data(t * CHUNK)) {
+                    let cell_limit;
+                    (*f, *k_row, cell_limit) = cell_terms(ids, side, h0, k, x, v);
+                    limit = limit.min(cell_limit);
+                }
+                limit
+            })
+            .reduce(|| Real::INFINITY, Real::min)
+    }
+
+    /// From cell `first` on, per cell: its vertex indices and, per vertex, the side sign, rest
+    /// height and stiffness of its repulsion.
+    #[allow(clippy::type_complexity)]
+    fn cell_data(
+        &self,
+        first: usize,
+    ) -> impl Iterator<
+        Item = (
+            (
+                (&[u32; SIMPLEX_ARITY], &[Real; SIMPLEX_ARITY]),
+                &[Real; SIMPLEX_ARITY],
+            ),
+            &[Real; SIMPLEX_ARITY],
+        ),
+    > {
+        let (cells, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
+        let (side, _) = self.side.as_chunks::<SIMPLEX_ARITY>();
+        let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
+        let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
+        cells[first..]
+            .iter()
+            .zip(&side[first..])
+            .zip(&h0[first..])
+            .zip(&k[first..])
     }
 
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
@@ -201,7 +260,7 @@ impl EdgeRepulsion {
         for (cell, ids) in self.cells.chunks_exact(SIMPLEX_ARITY).enumerate() {
             for a in 0..SIMPLEX_ARITY {
                 let s = cell * SIMPLEX_ARITY + a;
-                let f = opposite(a);
+                let f = OPPOSITE[a];
                 let facet: [Vector; FACET_ARITY] = std::array::from_fn(|m| x[ids[f[m]] as usize]);
                 let normal = math::facet_normal(&facet);
                 let len = normal.length();
@@ -216,4 +275,50 @@ impl EdgeRepulsion {
         }
         e
     }
+}
+
+/// The repulsions of one cell, summed per vertex: the force on each vertex, its Gershgorin
+/// stiffness row, and the crossing limiter of the cell (infinite when no vertex approaches its
+/// facet).
+#[inline(always)]
+fn cell_terms(
+    ids: &[u32; SIMPLEX_ARITY],
+    side: &[Real; SIMPLEX_ARITY],
+    h0: &[Real; SIMPLEX_ARITY],
+    k: &[Real; SIMPLEX_ARITY],
+    x: &[Vector],
+    v: &[Vector],
+) -> ([Vector; SIMPLEX_ARITY], [Real; SIMPLEX_ARITY], Real) {
+    let xs: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
+    let vs: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| v[ids[a] as usize]);
+    let mut force = [Vector::ZERO; SIMPLEX_ARITY];
+    let mut stiffness = [0.0; SIMPLEX_ARITY];
+    let mut limit = Real::INFINITY;
+    for a in 0..SIMPLEX_ARITY {
+        let f = OPPOSITE[a];
+        let facet: [Vector; FACET_ARITY] = std::array::from_fn(|m| xs[f[m]]);
+        let r = repulsion(xs[a], &facet, side[a], h0[a], k[a]);
+        let (w, h, k_eff) = (r.weights, r.height, r.stiffness);
+        force[a] += r.force;
+        let mut foot_velocity = Vector::ZERO;
+        let mut wsum = 1.0;
+        for m in 0..FACET_ARITY {
+            force[f[m]] -= r.force * w[m];
+            foot_velocity += vs[f[m]] * w[m];
+            wsum += w[m].abs();
+        }
+        // Gershgorin rows of the rank-one term k_eff a aᵀ, a = (1, −w).
+        stiffness[a] += k_eff * wsum;
+        for m in 0..FACET_ARITY {
+            stiffness[f[m]] += k_eff * w[m].abs() * wsum;
+        }
+        // Crossing limiter.
+        if h > 0.0 {
+            let rate = r.normal.dot(vs[a] - foot_velocity);
+            if rate < 0.0 {
+                limit = limit.min(CROSSING_FRACTION * h / -rate);
+            }
+        }
+    }
+    (force, stiffness, limit)
 }

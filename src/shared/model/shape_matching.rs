@@ -30,15 +30,15 @@
 //! (`DESIGN.md` §4, lesson 9), `c = 2 ζ √(k m_cell/n)`.
 
 use super::super::material::Resolved;
-use super::super::math::{self, Real, Rotation, Vector};
-use super::super::mesh::Mesh;
-use super::{Accumulator, RotationFit, ShapeDamping};
+use super::super::math::{self, Real, Rotation, Vector, SIMPLEX_ARITY};
+use super::super::mesh::{CellKind, Mesh};
+use super::{Accumulator, NodeBounds, RotationFit, ShapeDamping};
 
 /// Calibration constant `s` of the shape-based material mapping.
 pub const MATERIAL_SCALE: Real = 4.7;
 
-/// Largest cell arity (hexahedron).
-const MAX_ARITY: usize = 8;
+/// Vertices of a cube cell.
+const CUBE_ARITY: usize = CellKind::Cube.arity();
 
 /// The rotation the element fits for current offsets `current` (from the centroid) and rest
 /// offsets `rest`, starting from `warm` (last substep's rotation).
@@ -70,47 +70,44 @@ pub fn residual_torque(rest: &[Vector], current: &[Vector], q: Rotation, k: Real
     math::ang_norm(t)
 }
 
-/// Forces of one shape-based element with vertices at `x` moving with `v`, rest offsets
-/// `rest` (from the rest centroid), stiffness `k` and damping `c` per vertex. Writes the force
-/// on each vertex into `out` and returns the fitted rotation.
+/// Forces of one shape-based element with `N` vertices at `x` moving with `v`, rest offsets
+/// `rest` (from the rest centroid), stiffness `k` and damping `c` per vertex. Returns the force
+/// on each vertex and the fitted rotation.
 #[allow(clippy::too_many_arguments)]
-pub fn element_forces(
-    rest: &[Vector],
-    x: &[Vector],
-    v: &[Vector],
+#[inline]
+pub fn element_forces<const N: usize>(
+    rest: &[Vector; N],
+    x: &[Vector; N],
+    v: &[Vector; N],
     k: Real,
     c: Real,
     fit: RotationFit,
     damping: ShapeDamping,
     warm: Rotation,
-    out: &mut [Vector],
-) -> Rotation {
-    let n = rest.len();
-    let inv_n = 1.0 / n as Real;
+) -> ([Vector; N], Rotation) {
+    let inv_n = 1.0 / N as Real;
     let xc = x.iter().copied().sum::<Vector>() * inv_n;
     let vc = v.iter().copied().sum::<Vector>() * inv_n;
-    let mut r = [Vector::ZERO; MAX_ARITY];
-    let mut dv = [Vector::ZERO; MAX_ARITY];
-    for a in 0..n {
-        r[a] = x[a] - xc;
-        dv[a] = v[a] - vc;
-    }
-    let q = fit_rotation(rest, &r[..n], fit, warm);
+    let r = x.map(|xa| xa - xc);
+    let dv = v.map(|va| va - vc);
+    let q = fit_rotation(rest, &r, fit, warm);
     let w = match damping {
-        ShapeDamping::RigidMotion if c > 0.0 => math::rigid_angular_velocity(&r[..n], &dv[..n]),
+        ShapeDamping::RigidMotion if c > 0.0 => math::rigid_angular_velocity(&r, &dv),
         _ => math::ANG_ZERO,
     };
-    for a in 0..n {
+    let mut out = [Vector::ZERO; N];
+    for a in 0..N {
         let goal = q * rest[a];
         let ve = dv[a] - math::ang_cross(w, r[a]);
         out[a] = (goal - r[a]) * k - ve * c;
     }
-    q
+    (out, q)
 }
 
 /// Shape-based elements on any cells.
 #[derive(Clone, Debug)]
 pub(crate) struct ShapeMatching {
+    kind: CellKind,
     arity: usize,
     cells: Vec<u32>,
     rest: Vec<Vector>,
@@ -132,6 +129,7 @@ impl ShapeMatching {
         let arity = mesh.kind().arity();
         let nodes = mesh.nodes();
         let mut out = ShapeMatching {
+            kind: mesh.kind(),
             arity,
             cells: mesh.cell_indices().to_vec(),
             rest: Vec::with_capacity(mesh.cell_indices().len()),
@@ -158,35 +156,77 @@ impl ShapeMatching {
         out
     }
 
-    pub fn accumulate(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
-        let n = self.arity;
-        let mut xs = [Vector::ZERO; MAX_ARITY];
-        let mut vs = [Vector::ZERO; MAX_ARITY];
-        let mut fs = [Vector::ZERO; MAX_ARITY];
-        for (cell, ids) in self.cells.chunks_exact(n).enumerate() {
-            for (a, &i) in ids.iter().enumerate() {
-                xs[a] = x[i as usize];
-                vs[a] = v[i as usize];
-            }
-            let (k, c) = (self.k[cell], self.c[cell]);
-            self.rotations[cell] = element_forces(
-                &self.rest[cell * n..(cell + 1) * n],
-                &xs[..n],
-                &vs[..n],
-                k,
-                c,
-                self.fit,
-                self.damping,
-                self.rotations[cell],
-                &mut fs[..n],
-            );
-            for (a, &i) in ids.iter().enumerate() {
-                acc.force[i as usize] += fs[a];
-                // Row bound of k (𝟙 − 𝟏𝟏ᵀ/n): 2k(1 − 1/n) ≤ 2k, plus the rotation's variation.
-                acc.stiffness[i as usize] += 2.0 * k;
-                acc.damping[i as usize] += 2.0 * c;
+    /// Adds the cells' bounds, which do not change with the state: the row bound of
+    /// `k (𝟙 − 𝟏𝟏ᵀ/n)` is `2k(1 − 1/n) ≤ 2k`; the rest of `2k` covers the rotation's variation.
+    pub fn constant_bounds(&self, bounds: &mut NodeBounds) {
+        for (cell, ids) in self.cells.chunks_exact(self.arity).enumerate() {
+            for &i in ids {
+                bounds.stiffness[i as usize] += 2.0 * self.k[cell];
+                bounds.damping[i as usize] += 2.0 * self.c[cell];
             }
         }
+    }
+
+    /// Adds the cells' forces into `acc` and advances each cell's warm-start rotation.
+    pub fn accumulate(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+        match self.kind {
+            CellKind::Simplex => self.accumulate_n::<SIMPLEX_ARITY>(x, v, acc),
+            CellKind::Cube => self.accumulate_n::<CUBE_ARITY>(x, v, acc),
+        }
+    }
+
+    fn accumulate_n<const N: usize>(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+        let n = x.len();
+        let (v, force) = (&v[..n], &mut acc.force[..n]);
+        let (fit, damping) = (self.fit, self.damping);
+        let (cells, _) = self.cells.as_chunks::<N>();
+        let (rest, _) = self.rest.as_chunks::<N>();
+        let terms = cells.iter().zip(rest).zip(&self.k).zip(&self.c);
+        for ((((ids, rest), &k), &c), q) in terms.zip(&mut self.rotations) {
+            let f;
+            (f, *q) = cell_forces(ids, rest, k, c, fit, damping, *q, x, v);
+            for a in 0..N {
+                force[ids[a] as usize] += f[a];
+            }
+        }
+    }
+
+    /// Writes each cell's force on each of its vertices into `force` (one entry per slot) and
+    /// advances the cells' rotations, on rayon's threads.
+    #[cfg(feature = "parallel")]
+    pub fn evaluate_cells(&mut self, x: &[Vector], v: &[Vector], force: &mut [Vector]) {
+        match self.kind {
+            CellKind::Simplex => self.evaluate_cells_n::<SIMPLEX_ARITY>(x, v, force),
+            CellKind::Cube => self.evaluate_cells_n::<CUBE_ARITY>(x, v, force),
+        }
+    }
+
+    #[cfg(feature = "parallel")]
+    fn evaluate_cells_n<const N: usize>(
+        &mut self,
+        x: &[Vector],
+        v: &[Vector],
+        force: &mut [Vector],
+    ) {
+        use super::parallel::CELLS_PER_TASK as CHUNK;
+        use rayon::prelude::*;
+        let v = &v[..x.len()];
+        let (fit, damping) = (self.fit, self.damping);
+        let (cells, _) = self.cells.as_chunks::<N>();
+        let (rest, _) = self.rest.as_chunks::<N>();
+        let (k, c) = (&self.k, &self.c);
+        let (out, _) = force.as_chunks_mut::<N>();
+        out.par_chunks_mut(CHUNK)
+            .zip(self.rotations.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(t, (out, rotations))| {
+                let first = t * CHUNK;
+                let terms = cells[first..].iter().zip(&rest[first..]);
+                let terms = terms.zip(&k[first..]).zip(&c[first..]);
+                for ((f, q), (((ids, rest), &k), &c)) in out.iter_mut().zip(rotations).zip(terms) {
+                    (*f, *q) = cell_forces(ids, rest, k, c, fit, damping, *q, x, v);
+                }
+            });
     }
 
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
@@ -202,4 +242,23 @@ impl ShapeMatching {
         }
         e
     }
+}
+
+/// [`element_forces`] of the cell with vertices `ids`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn cell_forces<const N: usize>(
+    ids: &[u32; N],
+    rest: &[Vector; N],
+    k: Real,
+    c: Real,
+    fit: RotationFit,
+    damping: ShapeDamping,
+    warm: Rotation,
+    x: &[Vector],
+    v: &[Vector],
+) -> ([Vector; N], Rotation) {
+    let xs = ids.map(|i| x[i as usize]);
+    let vs = ids.map(|i| v[i as usize]);
+    element_forces(rest, &xs, &vs, k, c, fit, damping, warm)
 }

@@ -23,7 +23,7 @@
 use super::super::material::Resolved;
 use super::super::math::{Real, Vector};
 use super::super::mesh::Mesh;
-use super::{reduced_mass, Accumulator};
+use super::{reduced_mass, Accumulator, NodeBounds};
 
 /// Calibration constant `s` of the material mapping `k = s E V_s / L0²`.
 pub const MATERIAL_SCALE: Real = 5.8;
@@ -92,23 +92,100 @@ impl Springs {
         out
     }
 
-    pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+    /// Adds the bounds that do not change with the state: each spring is a rank-one term with
+    /// weights `(1, −1)`, so it adds `2c` to both nodes' damping rows and, for the linear law,
+    /// `2k` to their stiffness rows.
+    pub fn constant_bounds(&self, bounds: &mut NodeBounds) {
         for s in 0..self.pairs.len() {
             let [i, j] = self.pairs[s];
             let (i, j) = (i as usize, j as usize);
-            let (l0, k, c) = (self.rest[s], self.k[s], self.c[s]);
-            let (f, k_eff) = match self.law {
-                Law::Linear => (linear_force(x[i], x[j], v[i], v[j], l0, k, c), k),
-                Law::Nonlinear => super::nonlinear_springs::force(x[i], x[j], v[i], v[j], l0, k, c),
-            };
-            acc.force[i] += f;
-            acc.force[j] -= f;
-            // Rank-one term with weights (1, −1): each row sums to 2k (2c).
-            acc.stiffness[i] += 2.0 * k_eff;
-            acc.stiffness[j] += 2.0 * k_eff;
-            acc.damping[i] += 2.0 * c;
-            acc.damping[j] += 2.0 * c;
+            if self.law == Law::Linear {
+                bounds.stiffness[i] += 2.0 * self.k[s];
+                bounds.stiffness[j] += 2.0 * self.k[s];
+            }
+            bounds.damping[i] += 2.0 * self.c[s];
+            bounds.damping[j] += 2.0 * self.c[s];
         }
+    }
+
+    /// Adds the spring forces (and, for the nonlinear law, the stiffness that changes with the
+    /// length) into `acc`. The constant bounds are added by [`Springs::constant_bounds`].
+    pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+        match self.law {
+            Law::Linear => self.accumulate_law::<false>(x, v, acc),
+            Law::Nonlinear => self.accumulate_law::<true>(x, v, acc),
+        }
+    }
+
+    fn accumulate_law<const NONLINEAR: bool>(
+        &self,
+        x: &[Vector],
+        v: &[Vector],
+        acc: &mut Accumulator,
+    ) {
+        // Equal lengths let one bounds check per index cover every array.
+        let n = x.len();
+        let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
+        for (((&[i, j], &l0), &k), &c) in self.terms(0) {
+            let (f, k_row) = term::<NONLINEAR>([i, j], l0, k, c, x, v);
+            let (i, j) = (i as usize, j as usize);
+            force[i] += f;
+            force[j] -= f;
+            if NONLINEAR {
+                stiffness[i] += k_row;
+                stiffness[j] += k_row;
+            }
+        }
+    }
+
+    /// Writes each spring's forces on its two nodes (`[f, −f]`) into `force` and, for the
+    /// nonlinear law, its row bound on both into `stiffness` (ignored for the linear law), on
+    /// rayon's threads.
+    #[cfg(feature = "parallel")]
+    pub fn evaluate(
+        &self,
+        x: &[Vector],
+        v: &[Vector],
+        force: &mut [[Vector; 2]],
+        stiffness: &mut [[Real; 2]],
+    ) {
+        use super::parallel::TERMS_PER_TASK as CHUNK;
+        use rayon::prelude::*;
+        let v = &v[..x.len()];
+        match self.law {
+            Law::Linear => force
+                .par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(t, force)| {
+                    for (f, (((&pair, &l0), &k), &c)) in force.iter_mut().zip(self.terms(t * CHUNK))
+                    {
+                        let (fi, _) = term::<false>(pair, l0, k, c, x, v);
+                        *f = [fi, -fi];
+                    }
+                }),
+            Law::Nonlinear => force
+                .par_chunks_mut(CHUNK)
+                .zip(stiffness.par_chunks_mut(CHUNK))
+                .enumerate()
+                .for_each(|(t, (force, stiffness))| {
+                    let out = force.iter_mut().zip(stiffness);
+                    for ((f, k_row), (((&pair, &l0), &k), &c)) in out.zip(self.terms(t * CHUNK)) {
+                        let (fi, ki) = term::<true>(pair, l0, k, c, x, v);
+                        (*f, *k_row) = ([fi, -fi], [ki, ki]);
+                    }
+                }),
+        }
+    }
+
+    /// The springs from `first` on: node pair, rest length, stiffness, damping.
+    #[allow(clippy::type_complexity)]
+    fn terms(&self, first: usize) -> impl Iterator<Item = (((&[u32; 2], &Real), &Real), &Real)> {
+        let pairs = &self.pairs[first..];
+        pairs
+            .iter()
+            .zip(&self.rest[first..])
+            .zip(&self.k[first..])
+            .zip(&self.c[first..])
     }
 
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
@@ -122,5 +199,25 @@ impl Springs {
             };
         }
         e
+    }
+}
+
+/// One spring: the force on its first node and, for the nonlinear law, the row bound `2 k_eff`
+/// of its current axial stiffness (the linear law's bound is constant).
+#[inline(always)]
+fn term<const NONLINEAR: bool>(
+    [i, j]: [u32; 2],
+    l0: Real,
+    k: Real,
+    c: Real,
+    x: &[Vector],
+    v: &[Vector],
+) -> (Vector, Real) {
+    let (i, j) = (i as usize, j as usize);
+    if NONLINEAR {
+        let (f, k_eff) = super::nonlinear_springs::force(x[i], x[j], v[i], v[j], l0, k, c);
+        (f, 2.0 * k_eff)
+    } else {
+        (linear_force(x[i], x[j], v[i], v[j], l0, k, c), 0.0)
     }
 }
