@@ -455,11 +455,35 @@ pub(crate) struct NodeContact {
     pub candidate: usize,
     pub point: Vector,
     pub normal: Vector,
-    pub impulse: Vector,
+}
+
+/// Inverse mass of a rigid body felt by an impulse along `dir` (unit) at world point `point`:
+/// `dirᵀ M⁻¹ dir + (r × dir)ᵀ I⁻¹ (r × dir)`, with rapier's effective (lock-aware) values.
+pub(crate) fn body_inv_mass_at(body: &RigidBody, point: Vector, dir: Vector) -> Real {
+    let props = body.mass_properties();
+    let rn = math::cross(point - body.center_of_mass(), dir);
+    (props.effective_inv_mass * dir).dot(dir)
+        + math::ang_dot(rn, props.effective_world_inv_inertia * rn)
+}
+
+/// The dynamic body behind a candidate, if any.
+fn dynamic_body(cand: &Candidate<'_>, motions: &[BodyMotion]) -> Option<RigidBodyHandle> {
+    if cand.dynamic {
+        cand.body(motions)
+    } else {
+        None
+    }
 }
 
 /// Resolves one free node against its candidates (at their end-of-substep poses): may move `x`
-/// back to a surface and change `v`.
+/// back to a surface and change `v`, and gives a dynamic body the opposite impulse.
+///
+/// With a dynamic body, the impulse is computed with the effective mass of both sides (the
+/// node's mass and the body's mass and inertia at the contact point), applied to the body at
+/// once, so later nodes see its new velocity: a light body is not launched by the whole
+/// momentum change of every node it touches. Each impulse (normal, then friction along the
+/// remaining slip) is equal and opposite, so momentum is conserved, and it never more than
+/// reverses the relative velocity along its own direction, so it creates no energy.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn resolve_node(
     x: &mut Vector,
@@ -473,7 +497,7 @@ pub(crate) fn resolve_node(
     candidate_ids: &[u32],
     candidates: &[Candidate<'_>],
     motions: &[BodyMotion],
-    bodies: &RigidBodySet,
+    bodies: &mut RigidBodySet,
 ) -> Option<NodeContact> {
     let start = *x;
     let motion = *v * h;
@@ -558,6 +582,7 @@ pub(crate) fn resolve_node(
     }
     let (_, n, point, ci, inside) = best?;
     let cand = &candidates[ci];
+    let rigid = dynamic_body(cand, motions);
     let vc = cand.point_velocity(point, s1, dt, motions, bodies);
     let vr = *v - vc;
     let vn = vr.dot(n);
@@ -567,33 +592,79 @@ pub(crate) fn resolve_node(
         (start - point).dot(n).max(0.0)
     };
     let vn_min = -gap / h;
-    let v_old = *v;
     if inside {
         *x = point;
     }
     if vn < vn_min {
         let approach = (v_before - vc).dot(n);
-        let vn_new = if -approach > restitution_threshold && cand.restitution > 0.0 {
+        let mut vn_new = if -approach > restitution_threshold && cand.restitution > 0.0 {
             (-cand.restitution * approach).max(vn_min)
         } else {
             vn_min
         };
-        let dvn = vn_new - vn;
-        let vt = vr - n * vn;
-        let vt_len = vt.length();
-        let vt_new = if vt_len > 0.0 {
-            vt * (1.0 - cand.friction * dvn / vt_len).max(0.0)
-        } else {
-            Vector::ZERO
+        if rigid.is_some() {
+            // Never more than reverse the approach this impulse sees: no energy is created.
+            vn_new = vn_new.min(-vn);
+        }
+        let inv_mass = 1.0 / mass;
+        let inv_mass_body = |bodies: &RigidBodySet, dir: Vector| {
+            rigid
+                .and_then(|b| bodies.get(b))
+                .map_or(0.0, |rb| body_inv_mass_at(rb, point, dir))
         };
-        *v = vc + n * vn_new + vt_new;
+        // Normal impulse on the node (the body takes the opposite).
+        let jn = (vn_new - vn) / (inv_mass + inv_mass_body(bodies, n));
+        *v += n * (jn * inv_mass);
+        apply_to_body(bodies, rigid, -n * jn, point);
+        // Friction: against the slip left after the normal impulse, at most μ jn.
+        let vc = cand.point_velocity(point, s1, dt, motions, bodies);
+        let vr = *v - vc;
+        let vt = vr - n * vr.dot(n);
+        let vt_len = vt.length();
+        if vt_len > 0.0 && cand.friction > 0.0 {
+            let t = vt / vt_len;
+            let stick = vt_len / (inv_mass + inv_mass_body(bodies, t));
+            let jt = stick.min(cand.friction * jn);
+            *v -= t * (jt * inv_mass);
+            apply_to_body(bodies, rigid, t * jt, point);
+        }
     }
     Some(NodeContact {
         candidate: ci,
         point,
         normal: n,
-        impulse: (*v - v_old) * mass,
     })
+}
+
+/// After an impulse to the dynamic body behind candidate `ci`, moves that body's candidates to
+/// their end-of-substep poses predicted from its new velocity (later contacts of the same
+/// substep then see where it really goes).
+pub(crate) fn refresh_poses(
+    candidates: &mut [Candidate<'_>],
+    ci: usize,
+    s1: Real,
+    dt: Real,
+    motions: &[BodyMotion],
+    bodies: &RigidBodySet,
+) {
+    let Some(m) = candidates[ci].motion.filter(|_| candidates[ci].dynamic) else {
+        return;
+    };
+    for c in candidates.iter_mut().filter(|c| c.motion == Some(m)) {
+        c.pose = c.pose_at(s1, dt, motions, bodies);
+    }
+}
+
+/// Applies `impulse` at `point` to a dynamic body (its velocity changes at once).
+pub(crate) fn apply_to_body(
+    bodies: &mut RigidBodySet,
+    body: Option<RigidBodyHandle>,
+    impulse: Vector,
+    point: Vector,
+) {
+    if let Some(rb) = body.and_then(|b| bodies.get_mut(b)) {
+        rb.apply_impulse_at_point(impulse, point, true);
+    }
 }
 
 /// One facet contact: velocity changes for the facet's nodes and the impulse the facet took.
@@ -602,8 +673,8 @@ pub(crate) struct FacetContact {
     pub point: Vector,
     /// Barycentric weights of the contact point.
     pub weights: [Real; FACET_ARITY],
-    /// Impulse per unit inverse-mass-weight: node `j` gains `w_j / m_j · lambda · n` of
-    /// velocity.
+    /// Impulse times `h`: node `j` gains `w_j / m_j · lambda / h · n` of velocity, and a
+    /// dynamic body takes `−lambda / h · n` at `point`.
     pub lambda: Real,
     pub normal: Vector,
 }
@@ -612,13 +683,18 @@ pub(crate) struct FacetContact {
 /// (substep start) to `y` (predicted end), both outward oriented. A feature counts only if it
 /// crosses the facet's plane during the substep (outside at the start, within a sliver of
 /// tolerance, and behind it at the end) inside the facet's prism: a feature deep behind one
-/// facet belongs to another. Returns the deepest crossing.
+/// facet belongs to another. Returns the deepest crossing, with the impulse that puts the facet
+/// on the feature at the end of the substep: on a dynamic body the feature moves back too, by
+/// its share of the effective inverse mass (facet `Σ w_j²/m_j`, body at the contact point).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn resolve_facet(
     x: &[Vector; FACET_ARITY],
     y: &[Vector; FACET_ARITY],
     inv_masses: &[Real; FACET_ARITY],
     candidate_ids: &[u32],
     candidates: &[Candidate<'_>],
+    motions: &[BodyMotion],
+    bodies: &RigidBodySet,
 ) -> Option<FacetContact> {
     let unit = |q: &[Vector; FACET_ARITY]| -> Option<Vector> {
         let normal = math::facet_normal(q);
@@ -636,7 +712,8 @@ pub(crate) fn resolve_facet(
     let denom_of = |w: &[Real; FACET_ARITY]| -> Real {
         w.iter().zip(inv_masses).map(|(w, im)| w * w * im).sum()
     };
-    let mut best: Option<(Real, FacetContact)> = None;
+    // (depth, candidate, point, weights, facet-side inverse mass)
+    let mut best: Option<(Real, usize, Vector, [Real; FACET_ARITY], Real)> = None;
     for &ci in candidate_ids {
         let cand = &candidates[ci as usize];
         for f in &cand.features {
@@ -657,21 +734,22 @@ pub(crate) fn resolve_facet(
             if denom <= 0.0 {
                 continue;
             }
-            if best.as_ref().is_none_or(|(bd, _)| d < *bd) {
-                best = Some((
-                    d,
-                    FacetContact {
-                        candidate: ci as usize,
-                        point: p,
-                        weights: w,
-                        lambda: d / denom,
-                        normal: n,
-                    },
-                ));
+            if best.is_none_or(|b| d < b.0) {
+                best = Some((d, ci as usize, p, w, denom));
             }
         }
     }
-    best.map(|(_, c)| c)
+    let (d, ci, point, weights, denom) = best?;
+    let body = dynamic_body(&candidates[ci], motions)
+        .and_then(|b| bodies.get(b))
+        .map_or(0.0, |rb| body_inv_mass_at(rb, point, n));
+    Some(FacetContact {
+        candidate: ci,
+        point,
+        weights,
+        lambda: d / (denom + body),
+        normal: n,
+    })
 }
 
 /// Depth of `x` inside the deepest of the given candidates (zero when outside all).

@@ -642,6 +642,14 @@ impl DeformablePipeline {
                         &sc.motions,
                         bodies,
                     ) {
+                        contact::refresh_poses(
+                            &mut candidates,
+                            c.candidate,
+                            s1,
+                            dt,
+                            &sc.motions,
+                            bodies,
+                        );
                         body.positions[i] = x;
                         body.velocities[i] = v;
                         sc.touched_nodes[k] = true;
@@ -652,13 +660,6 @@ impl DeformablePipeline {
                             node: i as u32,
                         });
                         sc.touched_colliders[c.candidate] = true;
-                        let cand = &candidates[c.candidate];
-                        if cand.dynamic {
-                            if let Some(rb) = cand.body(&sc.motions).and_then(|b| bodies.get_mut(b))
-                            {
-                                rb.apply_impulse_at_point(-c.impulse, c.point, true);
-                            }
-                        }
                     }
                 }
                 for (f, facet) in facets.iter().enumerate() {
@@ -680,15 +681,19 @@ impl DeformablePipeline {
                     });
                     let x: [Vector; FACET_ARITY] =
                         std::array::from_fn(|a| body.positions[facet[a] as usize]);
-                    if let Some(fc) =
-                        contact::resolve_facet(&x, &y, &im, &sc.facet_cands[b0..b1], &candidates)
-                    {
-                        let mut gained = Vector::ZERO;
+                    if let Some(fc) = contact::resolve_facet(
+                        &x,
+                        &y,
+                        &im,
+                        &sc.facet_cands[b0..b1],
+                        &candidates,
+                        &sc.motions,
+                        bodies,
+                    ) {
                         for a in 0..FACET_ARITY {
                             let i = facet[a] as usize;
-                            let dv = fc.normal * (fc.weights[a] * im[a] * fc.lambda / h);
-                            body.velocities[i] += dv;
-                            gained += dv * body.masses[i] * if im[a] > 0.0 { 1.0 } else { 0.0 };
+                            body.velocities[i] +=
+                                fc.normal * (fc.weights[a] * im[a] * fc.lambda / h);
                         }
                         facet_contacts += 1;
                         body.contacts.push(ContactPoint {
@@ -698,13 +703,26 @@ impl DeformablePipeline {
                             node: u32::MAX,
                         });
                         sc.touched_colliders[fc.candidate] = true;
-                        let cand = &candidates[fc.candidate];
-                        if cand.dynamic {
-                            if let Some(rb) = cand.body(&sc.motions).and_then(|b| bodies.get_mut(b))
-                            {
-                                rb.apply_impulse_at_point(-gained, fc.point, true);
-                            }
-                        }
+                        // The facet's whole impulse (a bone-held node's share included: the
+                        // bone holds it) goes back to a dynamic body.
+                        let rigid = candidates[fc.candidate]
+                            .dynamic
+                            .then(|| candidates[fc.candidate].body(&sc.motions))
+                            .flatten();
+                        contact::apply_to_body(
+                            bodies,
+                            rigid,
+                            -fc.normal * (fc.lambda / h),
+                            fc.point,
+                        );
+                        contact::refresh_poses(
+                            &mut candidates,
+                            fc.candidate,
+                            s1,
+                            dt,
+                            &sc.motions,
+                            bodies,
+                        );
                     }
                 }
                 time_contacts += tc.elapsed().as_secs_f64();
