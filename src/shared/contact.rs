@@ -9,8 +9,9 @@
 //! **Moving colliders.** A collider's pose at any time of the step comes from its body: fixed
 //! bodies stay put; kinematic bodies are interpolated from `position()` to `next_position()`
 //! (position-based) or predicted from their velocity (velocity-based); dynamic bodies are
-//! predicted from their current velocity, which the deformable's impulses change during the
-//! step. The point velocity of a contact is that of the collider's motion.
+//! predicted from their current velocity plus what rapier's step will add to it (gravity and
+//! user forces), and the deformable's impulses change that velocity during the step. The point
+//! velocity of a contact is that of the collider's motion.
 //!
 //! **Node against collider**, each substep, after element forces and before `x += h v`, for
 //! every free surface node, against its candidates at their end-of-substep poses:
@@ -23,20 +24,27 @@
 //!
 //! The normal velocity relative to the collider becomes `−e · (approach speed before this
 //! substep's force update)` when that approach is faster than the restitution threshold (a
-//! bounce), else just what closes the gap (resting contact); the tangential velocity loses
-//! `μ Δv_n` (Coulomb; it sticks when that is enough). `e` and `μ` combine the deformable's and
-//! the collider's coefficients with rapier's rules. The momentum the node gains is taken from a
-//! dynamic body, at once, as an impulse at the contact point.
+//! bounce), else just what closes the gap (resting contact); friction is Coulomb's (it sticks
+//! when `μ` times the normal impulse is enough). `e` and `μ` combine the deformable's and the
+//! collider's coefficients with rapier's rules.
+//!
+//! **Dynamic bodies** take the opposite of every impulse, at once, at the contact point, and
+//! each impulse is computed with the effective mass of both sides (the node's or facet point's,
+//! and the body's mass and inertia there): momentum is conserved, no impulse more than reverses
+//! the approach it sees (no energy is created), and a body lighter than the nodes under it is
+//! not launched (see [`Contact`]).
 //!
 //! **Rigid features against soft faces.** A rigid corner or thin edge can reach between the
 //! nodes of a coarse mesh without touching any of them. So each substep the vertices of
 //! cuboids and convex polytopes, points sampled along their edges (spacing half the shortest
-//! surface edge), and the deepest points of balls and capsules are tested against the
-//! deformable's surface facets (triangles in 3D, segments in 2D): a feature that crosses a
-//! facet's plane during the substep inside the facet's prism moves the facet's nodes (mass- and
-//! barycentric-weighted velocity change) so the facet ends the substep on the feature, and the
-//! opposite impulse goes to a dynamic body. Not covered: features of trimeshes, heightfields,
-//! compound and other shapes (their surfaces still stop nodes), and friction on facet contacts.
+//! surface edge), and balls (the centres of balls and of samples along capsule axes, with their
+//! radius) are tested against the deformable's surface facets (triangles in 3D, segments in
+//! 2D): a feature that crosses a facet during the substep (a point inside the facet's prism; a
+//! ball measured from the facet point closest to its centre, so that it also meets creases)
+//! moves the facet's nodes (mass- and barycentric-weighted velocity change) so the facet ends
+//! the substep on the feature, with friction, and the opposite impulse goes to a dynamic body.
+//! Not covered: features of trimeshes, heightfields, compound and other shapes (their surfaces
+//! still stop nodes).
 
 use super::math::{self, Pose, Real, Vector, DIM, FACET_ARITY};
 use super::rapier::dynamics::{
@@ -161,8 +169,13 @@ pub(crate) struct Candidate<'a> {
     pub friction: Real,
     pub restitution: Real,
     pub features: Vec<Feature>,
+    /// Velocity rapier adds to a dynamic body in its step after this one (gravity and user
+    /// forces), counted in the body's motion over this step.
+    pub drift: Vector,
     /// Pose at the end of the current substep.
     pub pose: Pose,
+    /// How far a dynamic body's centre of mass is at `pose` from where it is now.
+    pub shift: Vector,
     /// Pose at the start of the current substep.
     pub prev_pose: Pose,
 }
@@ -176,11 +189,34 @@ impl Candidate<'_> {
         bodies: &RigidBodySet,
     ) -> Pose {
         match self.motion {
-            Some(m) => motions[m].pose_at(s, dt, bodies) * self.local_pose,
+            Some(m) => {
+                let mut pose = motions[m].pose_at(s, dt, bodies) * self.local_pose;
+                pose.translation += self.drift * (s * dt);
+                pose
+            }
             None => self.local_pose,
         }
     }
 
+    /// Moves to the end of the next substep (at fraction `s1` of the step).
+    pub fn advance(&mut self, s1: Real, dt: Real, motions: &[BodyMotion], bodies: &RigidBodySet) {
+        self.prev_pose = self.pose;
+        self.update(s1, dt, motions, bodies);
+    }
+
+    /// Recomputes the end-of-substep pose (at fraction `s1`), after an impulse changed the
+    /// velocity of a dynamic body.
+    pub fn update(&mut self, s1: Real, dt: Real, motions: &[BodyMotion], bodies: &RigidBodySet) {
+        self.pose = self.pose_at(s1, dt, motions, bodies);
+        self.shift = match self.rigid(motions).and_then(|b| bodies.get(b)) {
+            // Rapier moves the centre of mass by `linvel · t` and turns about it.
+            Some(rb) => (rb.linvel() + self.drift) * (s1 * dt),
+            None => Vector::ZERO,
+        };
+    }
+
+    /// Velocity of the collider's material point at `p` (on the end-of-substep pose, at
+    /// fraction `s` of the step).
     pub fn point_velocity(
         &self,
         p: Vector,
@@ -189,7 +225,32 @@ impl Candidate<'_> {
         motions: &[BodyMotion],
         bodies: &RigidBodySet,
     ) -> Vector {
+        self.anchored_velocity(p, self.anchor(p), s, dt, motions, bodies)
+    }
+
+    /// Where the material point at `p` on the end-of-substep pose is on a dynamic body now
+    /// (rapier's lever arms are taken from its present centre of mass), or `p` itself.
+    pub fn anchor(&self, p: Vector) -> Vector {
+        p - self.shift
+    }
+
+    /// [`Candidate::point_velocity`] with the anchor of `p` given: it stays that of the pose
+    /// where a contact was found while later impulses move the predicted pose.
+    #[allow(clippy::too_many_arguments)]
+    pub fn anchored_velocity(
+        &self,
+        p: Vector,
+        anchor: Vector,
+        s: Real,
+        dt: Real,
+        motions: &[BodyMotion],
+        bodies: &RigidBodySet,
+    ) -> Vector {
         match self.motion {
+            Some(_) if self.dynamic => self
+                .rigid(motions)
+                .and_then(|b| bodies.get(b))
+                .map_or(Vector::ZERO, |rb| rb.velocity_at_point(anchor) + self.drift),
             Some(m) => {
                 let body_pose = motions[m].pose_at(s, dt, bodies);
                 motions[m].point_velocity(p, &body_pose, dt, bodies)
@@ -201,10 +262,53 @@ impl Candidate<'_> {
     pub fn body(&self, motions: &[BodyMotion]) -> Option<RigidBodyHandle> {
         self.motion.map(|m| motions[m].handle)
     }
+
+    /// The dynamic body behind this collider, if any.
+    pub fn rigid(&self, motions: &[BodyMotion]) -> Option<RigidBodyHandle> {
+        self.body(motions).filter(|_| self.dynamic)
+    }
+
+    /// Inverse mass of the dynamic body (zero for others) felt by an impulse along `dir`
+    /// (unit) at `anchor`: `dirᵀ M⁻¹ dir + (r × dir)ᵀ I⁻¹ (r × dir)`, with rapier's effective
+    /// (lock-aware) values.
+    pub fn inv_mass_at(
+        &self,
+        anchor: Vector,
+        dir: Vector,
+        motions: &[BodyMotion],
+        bodies: &RigidBodySet,
+    ) -> Real {
+        self.rigid(motions)
+            .and_then(|b| bodies.get(b))
+            .map_or(0.0, |rb| {
+                let props = rb.mass_properties();
+                let rn = math::cross(anchor - rb.center_of_mass(), dir);
+                (props.effective_inv_mass * dir).dot(dir)
+                    + math::ang_dot(rn, props.effective_world_inv_inertia * rn)
+            })
+    }
+
+    /// Gives the dynamic body (if any) `impulse` at `anchor`: its velocity changes at once.
+    pub fn apply_impulse(
+        &self,
+        impulse: Vector,
+        anchor: Vector,
+        motions: &[BodyMotion],
+        bodies: &mut RigidBodySet,
+    ) {
+        if let Some(rb) = self.rigid(motions).and_then(|b| bodies.get_mut(b)) {
+            rb.apply_impulse_at_point(impulse, anchor, true);
+        }
+    }
 }
 
 /// Builds a candidate for a collider near the deformable (`region`, world frame), with its
 /// point features sampled at `spacing`.
+///
+/// A dynamic body moves over the step with its velocity plus what rapier's step will add to it
+/// (`gravity` and user forces, `drift`): rapier moves it after the deformables, so a body
+/// resting on a deformable would otherwise start every step sunk by `g dt²` into it (past the
+/// facet test's start tolerance), and be supported only when already inside.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn candidate<'a>(
     handle: ColliderHandle,
@@ -214,16 +318,32 @@ pub(crate) fn candidate<'a>(
     material: &ContactMaterial,
     region: &Aabb,
     spacing: Real,
+    bodies: &RigidBodySet,
+    gravity: Vector,
+    dt: Real,
 ) -> Candidate<'a> {
     let local_pose = match (motion, collider.position_wrt_parent()) {
         (Some(_), Some(p)) => *p,
         (Some(m), None) => motions[m].pose0.inverse() * *collider.position(),
         (None, _) => *collider.position(),
     };
-    let (pose0, pose1) = match motion {
+    let drift = match motion {
+        Some(m) if motions[m].kind == MotionKind::Dynamic => bodies
+            .get(motions[m].handle)
+            .filter(|b| !b.is_sleeping())
+            .map_or(Vector::ZERO, |b| {
+                let props = b.mass_properties();
+                (gravity * b.gravity_scale() * props.effective_mass() + b.user_force())
+                    * props.effective_inv_mass
+                    * dt
+            }),
+        _ => Vector::ZERO,
+    };
+    let (pose0, mut pose1) = match motion {
         Some(m) => (motions[m].pose0 * local_pose, motions[m].pose1 * local_pose),
         None => (local_pose, local_pose),
     };
+    pose1.translation += drift * dt;
     let shape = collider.shape();
     let swept = shape
         .compute_aabb(&pose0)
@@ -252,7 +372,9 @@ pub(crate) fn candidate<'a>(
         friction,
         restitution,
         features,
+        drift,
         pose: pose0,
+        shift: Vector::ZERO,
         prev_pose: pose0,
     }
 }
@@ -450,22 +572,127 @@ pub(crate) fn node_candidates(
     }
 }
 
-/// What a node's contact did this substep.
-pub(crate) struct NodeContact {
+/// A contact between the deformable (a node, or a point of a surface facet) and a collider,
+/// solved on velocities.
+///
+/// Impulses on a dynamic body use the effective mass of both sides: `Σ w_j²/m_j` on the
+/// deformable, and the body's mass and inertia at the contact point. Each impulse is equal and
+/// opposite (momentum is conserved) and applied to the body at once, so later contacts see its
+/// new velocity: a light body is not launched by the whole momentum change of every node it
+/// touches. The normal impulse stays non-negative and reaches at most the target relative
+/// velocity (never more than the reverse of the approach: no energy is created); friction is
+/// Coulomb's, at most `μ` times the normal impulse, and no more than stops the slip.
+pub(crate) struct Contact {
     pub candidate: usize,
+    /// Contact point, on the collider's end-of-substep pose.
     pub point: Vector,
+    /// The same material point on a dynamic body's present pose (see [`Candidate::anchor`]):
+    /// the contact keeps it while later impulses move the predicted pose.
+    anchor: Vector,
+    /// Unit normal from the collider towards the deformable.
     pub normal: Vector,
-    pub impulse: Vector,
+    /// The deformable's side: nodes, barycentric weights and inverse masses (zero for a node
+    /// held by a bone: its share goes to the bone).
+    nodes: [u32; FACET_ARITY],
+    weights: [Real; FACET_ARITY],
+    inv_masses: [Real; FACET_ARITY],
+    /// Normal velocity of the deformable relative to the collider to reach.
+    target: Real,
+    normal_impulse: Real,
+    friction_impulse: Vector,
 }
 
-/// Resolves one free node against its candidates (at their end-of-substep poses): may move `x`
-/// back to a surface and change `v`.
+impl Contact {
+    fn velocity(&self, velocities: &[Vector]) -> Vector {
+        (0..FACET_ARITY)
+            .map(|a| velocities[self.nodes[a] as usize] * self.weights[a])
+            .sum()
+    }
+
+    fn inv_mass(&self) -> Real {
+        (0..FACET_ARITY)
+            .map(|a| self.weights[a] * self.weights[a] * self.inv_masses[a])
+            .sum()
+    }
+
+    /// `impulse` on the deformable's side, its opposite on a dynamic body.
+    fn apply(
+        &self,
+        impulse: Vector,
+        velocities: &mut [Vector],
+        cand: &Candidate<'_>,
+        motions: &[BodyMotion],
+        bodies: &mut RigidBodySet,
+    ) {
+        for a in 0..FACET_ARITY {
+            velocities[self.nodes[a] as usize] += impulse * (self.weights[a] * self.inv_masses[a]);
+        }
+        cand.apply_impulse(-impulse, self.anchor, motions, bodies);
+    }
+
+    /// One Gauss–Seidel update: the normal impulse towards the target, then friction.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve(
+        &mut self,
+        velocities: &mut [Vector],
+        s1: Real,
+        dt: Real,
+        candidates: &[Candidate<'_>],
+        motions: &[BodyMotion],
+        bodies: &mut RigidBodySet,
+    ) {
+        let cand = &candidates[self.candidate];
+        let n = self.normal;
+        let own = self.inv_mass();
+        let (point, anchor) = (self.point, self.anchor);
+        let relative = |this: &Self, velocities: &[Vector], bodies: &RigidBodySet| {
+            this.velocity(velocities)
+                - cand.anchored_velocity(point, anchor, s1, dt, motions, bodies)
+        };
+        let k = own + cand.inv_mass_at(anchor, n, motions, bodies);
+        if k > 0.0 {
+            let vn = relative(self, velocities, bodies).dot(n);
+            let total = (self.normal_impulse + (self.target - vn) / k).max(0.0);
+            let dj = total - self.normal_impulse;
+            self.normal_impulse = total;
+            self.apply(n * dj, velocities, cand, motions, bodies);
+        }
+        if cand.friction <= 0.0 {
+            return;
+        }
+        let vr = relative(self, velocities, bodies);
+        let vt = vr - n * vr.dot(n);
+        let slip = vt.length();
+        let mut total = self.friction_impulse;
+        if slip > 0.0 {
+            let t = vt / slip;
+            let kt = own + cand.inv_mass_at(anchor, t, motions, bodies);
+            if kt > 0.0 {
+                total -= t * (slip / kt);
+            }
+        }
+        let limit = cand.friction * self.normal_impulse;
+        let len = total.length();
+        if len > limit {
+            total *= limit / len;
+        }
+        let dj = total - self.friction_impulse;
+        self.friction_impulse = total;
+        self.apply(dj, velocities, cand, motions, bodies);
+    }
+}
+
+/// Finds the contact of one free node `i` (position `x`, velocity `v`, inverse mass
+/// `inv_mass`) with its candidates (at their end-of-substep poses): may move `x` back to a
+/// surface. The contact's target is the normal velocity relative to the collider that
+/// rebounds (restitution) or just closes the gap; [`Contact::solve`] applies it.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn resolve_node(
+    i: u32,
     x: &mut Vector,
-    v: &mut Vector,
+    v: Vector,
     v_before: Vector,
-    mass: Real,
+    inv_mass: Real,
     h: Real,
     s1: Real,
     dt: Real,
@@ -474,9 +701,9 @@ pub(crate) fn resolve_node(
     candidates: &[Candidate<'_>],
     motions: &[BodyMotion],
     bodies: &RigidBodySet,
-) -> Option<NodeContact> {
+) -> Option<Contact> {
     let start = *x;
-    let motion = *v * h;
+    let motion = v * h;
     let end = start + motion;
     let seg = Aabb::new(start.min(end), start.max(end)).loosened(1e-6);
     // (time of impact, outward normal, surface point, candidate, inside)
@@ -559,67 +786,86 @@ pub(crate) fn resolve_node(
     let (_, n, point, ci, inside) = best?;
     let cand = &candidates[ci];
     let vc = cand.point_velocity(point, s1, dt, motions, bodies);
-    let vr = *v - vc;
-    let vn = vr.dot(n);
+    let vn = (v - vc).dot(n);
     let gap = if inside {
         0.0
     } else {
         (start - point).dot(n).max(0.0)
     };
     let vn_min = -gap / h;
-    let v_old = *v;
     if inside {
         *x = point;
     }
-    if vn < vn_min {
-        let approach = (v_before - vc).dot(n);
-        let vn_new = if -approach > restitution_threshold && cand.restitution > 0.0 {
-            (-cand.restitution * approach).max(vn_min)
-        } else {
-            vn_min
-        };
-        let dvn = vn_new - vn;
-        let vt = vr - n * vn;
-        let vt_len = vt.length();
-        let vt_new = if vt_len > 0.0 {
-            vt * (1.0 - cand.friction * dvn / vt_len).max(0.0)
-        } else {
-            Vector::ZERO
-        };
-        *v = vc + n * vn_new + vt_new;
+    let approach = (v_before - vc).dot(n);
+    let mut target = if -approach > restitution_threshold && cand.restitution > 0.0 {
+        (-cand.restitution * approach).max(vn_min)
+    } else {
+        vn_min
+    };
+    if cand.dynamic && vn < target {
+        // Never more than reverse the approach this impulse sees: no energy is created.
+        target = target.min(-vn);
     }
-    Some(NodeContact {
+    let mut nodes = [i; FACET_ARITY];
+    let mut weights = [0.0; FACET_ARITY];
+    let mut inv_masses = [0.0; FACET_ARITY];
+    nodes[0] = i;
+    weights[0] = 1.0;
+    inv_masses[0] = inv_mass;
+    Some(Contact {
         candidate: ci,
         point,
+        anchor: cand.anchor(point),
         normal: n,
-        impulse: (*v - v_old) * mass,
+        nodes,
+        weights,
+        inv_masses,
+        target,
+        normal_impulse: 0.0,
+        friction_impulse: Vector::ZERO,
     })
 }
 
-/// One facet contact: velocity changes for the facet's nodes and the impulse the facet took.
-pub(crate) struct FacetContact {
-    pub candidate: usize,
-    pub point: Vector,
-    /// Barycentric weights of the contact point.
-    pub weights: [Real; FACET_ARITY],
-    /// Impulse per unit inverse-mass-weight: node `j` gains `w_j / m_j · lambda · n` of
-    /// velocity.
-    pub lambda: Real,
-    pub normal: Vector,
+/// After an impulse to the dynamic body behind candidate `ci`, moves that body's candidates to
+/// their end-of-substep poses predicted from its new velocity (later contacts of the same
+/// substep then see where it really goes).
+pub(crate) fn refresh_poses(
+    candidates: &mut [Candidate<'_>],
+    ci: usize,
+    s1: Real,
+    dt: Real,
+    motions: &[BodyMotion],
+    bodies: &RigidBodySet,
+) {
+    let Some(m) = candidates[ci].motion.filter(|_| candidates[ci].dynamic) else {
+        return;
+    };
+    for c in candidates.iter_mut().filter(|c| c.motion == Some(m)) {
+        c.update(s1, dt, motions, bodies);
+    }
 }
 
-/// Tests the features of the facet's candidates against the facet, which moves from `x`
-/// (substep start) to `y` (predicted end), both outward oriented. A feature counts only if it
-/// crosses the facet's plane during the substep (outside at the start, within a sliver of
-/// tolerance, and behind it at the end) inside the facet's prism: a feature deep behind one
-/// facet belongs to another. Returns the deepest crossing.
+/// Tests the features of the facet's candidates against the facet (nodes `facet`, inverse
+/// masses `inv_masses`), which moves from `x` (substep start) to `y` (predicted end), both
+/// outward oriented. A feature counts only if it crosses the facet's plane during the substep
+/// (outside at the start, within a sliver of tolerance, and behind it at the end) inside the
+/// facet's prism (a round feature: see [`separation`]): a feature deep behind one facet belongs
+/// to another. Returns the deepest crossing, as a contact whose target puts the facet on the
+/// feature at the end of the substep.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn resolve_facet(
+    facet: &[u32; FACET_ARITY],
     x: &[Vector; FACET_ARITY],
     y: &[Vector; FACET_ARITY],
     inv_masses: &[Real; FACET_ARITY],
+    h: Real,
+    s1: Real,
+    dt: Real,
     candidate_ids: &[u32],
     candidates: &[Candidate<'_>],
-) -> Option<FacetContact> {
+    motions: &[BodyMotion],
+    bodies: &RigidBodySet,
+) -> Option<Contact> {
     let unit = |q: &[Vector; FACET_ARITY]| -> Option<Vector> {
         let normal = math::facet_normal(q);
         let len = normal.length();
@@ -636,42 +882,120 @@ pub(crate) fn resolve_facet(
     let denom_of = |w: &[Real; FACET_ARITY]| -> Real {
         w.iter().zip(inv_masses).map(|(w, im)| w * w * im).sum()
     };
-    let mut best: Option<(Real, FacetContact)> = None;
+    // (depth, candidate, point, weights, direction)
+    let mut best: Option<(Real, usize, Vector, [Real; FACET_ARITY], Vector)> = None;
     for &ci in candidate_ids {
         let cand = &candidates[ci as usize];
         for f in &cand.features {
-            let p = cand.pose.transform_point(f.local) - n * f.radius;
-            let d = n.dot(p - y[0]);
+            let c = cand.pose.transform_point(f.local);
+            let Some((d, u, w)) = separation(y, n, c, f.radius) else {
+                continue;
+            };
             if d >= 0.0 {
                 continue;
             }
-            let p0 = cand.prev_pose.transform_point(f.local) - n0 * f.radius;
-            if n0.dot(p0 - x[0]) < -tolerance {
+            // At the start, outside the facet's plane (where the feature was over the facet
+            // then, or else along the normal).
+            let c0 = cand.prev_pose.transform_point(f.local);
+            let d0 = separation(x, n0, c0, f.radius)
+                .map_or_else(|| n0.dot(c0 - x[0]) - f.radius, |(d0, _, _)| d0);
+            if d0 < -tolerance {
                 continue;
             }
-            let w = math::facet_barycentric(y, p);
-            if w.iter().any(|&wj| wj < -1e-3) {
+            if denom_of(&w) <= 0.0 {
                 continue;
             }
-            let denom = denom_of(&w);
-            if denom <= 0.0 {
-                continue;
-            }
-            if best.as_ref().is_none_or(|(bd, _)| d < *bd) {
-                best = Some((
-                    d,
-                    FacetContact {
-                        candidate: ci as usize,
-                        point: p,
-                        weights: w,
-                        lambda: d / denom,
-                        normal: n,
-                    },
-                ));
+            if best.is_none_or(|b| d < b.0) {
+                best = Some((d, ci as usize, c - u * f.radius, w, u));
             }
         }
     }
-    best.map(|(_, c)| c)
+    let (d, ci, point, weights, u) = best?;
+    // The facet point's normal velocity relative to the feature must change by −d/h (d < 0) for
+    // them to meet at the end of the substep.
+    let v_facet: Vector = (0..FACET_ARITY)
+        .map(|a| (y[a] - x[a]) * (weights[a] / h))
+        .sum();
+    let normal = -u;
+    let vn = (v_facet - candidates[ci].point_velocity(point, s1, dt, motions, bodies)).dot(normal);
+    Some(Contact {
+        candidate: ci,
+        point,
+        anchor: candidates[ci].anchor(point),
+        normal,
+        nodes: *facet,
+        weights,
+        inv_masses: *inv_masses,
+        target: vn - d / h,
+        normal_impulse: 0.0,
+        friction_impulse: Vector::ZERO,
+    })
+}
+
+/// Signed separation of a feature (centre `c`, radius `r`) from a facet `q` of unit outward
+/// normal `n`, the direction in which it is measured, and the barycentric weights of the
+/// facet point it is measured from; `None` when the feature does not belong to the facet.
+///
+/// A point feature (`r = 0`) belongs to the facet whose prism holds it and is measured along
+/// the normal. A round feature is measured from the facet point closest to its centre, along
+/// the line between them: a ball over the crease between two tilted facets touches the crease
+/// itself, which is in neither facet's prism once the ball's lowest point is taken along
+/// either facet's normal. A round feature whose centre is behind the facet's plane counts only
+/// inside the prism (measured along the normal): beside the facet it belongs to a neighbour.
+fn separation(
+    q: &[Vector; FACET_ARITY],
+    n: Vector,
+    c: Vector,
+    r: Real,
+) -> Option<(Real, Vector, [Real; FACET_ARITY])> {
+    let prism = math::facet_barycentric(q, c);
+    let in_prism = prism.iter().all(|&w| w >= -1e-3);
+    if r > 0.0 {
+        let w = closest_on_facet(q, c, prism);
+        let offset = c - facet_point(q, &w);
+        let dist = offset.length();
+        if n.dot(offset) > 0.0 && dist > Real::MIN_POSITIVE {
+            return Some((dist - r, offset / dist, w));
+        }
+    }
+    in_prism.then(|| (n.dot(c - q[0]) - r, n, prism))
+}
+
+fn facet_point(q: &[Vector; FACET_ARITY], w: &[Real; FACET_ARITY]) -> Vector {
+    q.iter().zip(w).map(|(p, w)| *p * *w).sum()
+}
+
+/// Barycentric weights of the point of facet `q` closest to `c`, given those of `c`'s
+/// projection on the facet's plane (or line).
+fn closest_on_facet(
+    q: &[Vector; FACET_ARITY],
+    c: Vector,
+    projected: [Real; FACET_ARITY],
+) -> [Real; FACET_ARITY] {
+    if projected.iter().all(|&w| w >= 0.0) {
+        return projected;
+    }
+    // Outside: the closest point is on the boundary, the closest over the edges.
+    let mut best = (Real::INFINITY, projected);
+    for a in 0..FACET_ARITY {
+        for b in a + 1..FACET_ARITY {
+            let e = q[b] - q[a];
+            let l2 = e.length_squared();
+            let t = if l2 > Real::MIN_POSITIVE {
+                ((c - q[a]).dot(e) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let d2 = (q[a] + e * t).distance_squared(c);
+            if d2 < best.0 {
+                let mut w = [0.0; FACET_ARITY];
+                w[a] = 1.0 - t;
+                w[b] = t;
+                best = (d2, w);
+            }
+        }
+    }
+    best.1
 }
 
 /// Depth of `x` inside the deepest of the given candidates (zero when outside all).

@@ -92,6 +92,9 @@ struct Scratch {
     targets: Vec<Vector>,
 }
 
+/// Most feature crossings resolved per surface facet and substep.
+const FACET_PASSES: usize = 8;
+
 /// Fraction of a dynamically bound node's position error corrected per substep.
 const DYNAMIC_BINDING_CORRECTION: Real = 0.2;
 
@@ -439,6 +442,9 @@ impl DeformablePipeline {
                 &body.contact,
                 &region,
                 0.5 * shortest.max(1e-4),
+                bodies,
+                gravity,
+                dt,
             ));
         }
         sc.near.clear();
@@ -618,21 +624,21 @@ impl DeformablePipeline {
             if !candidates.is_empty() {
                 let tc = Instant::now();
                 for c in candidates.iter_mut() {
-                    c.prev_pose = c.pose;
-                    c.pose = c.pose_at(s1, dt, &sc.motions, bodies);
+                    c.advance(s1, dt, &sc.motions, bodies);
                 }
                 for (k, &i) in surface.iter().enumerate() {
                     let (b0, b1) = (sc.node_start[k] as usize, sc.node_start[k + 1] as usize);
                     if b0 == b1 {
                         continue;
                     }
-                    let i = i as usize;
-                    let (mut x, mut v) = (body.positions[i], body.velocities[i]);
-                    if let Some(c) = contact::resolve_node(
+                    let n_i = i as usize;
+                    let mut x = body.positions[n_i];
+                    let Some(mut c) = contact::resolve_node(
+                        i,
                         &mut x,
-                        &mut v,
-                        body.scratch_velocities[i],
-                        body.masses[i],
+                        body.velocities[n_i],
+                        body.scratch_velocities[n_i],
+                        body.inv_masses[n_i],
                         h,
                         s1,
                         dt,
@@ -641,35 +647,40 @@ impl DeformablePipeline {
                         &candidates,
                         &sc.motions,
                         bodies,
-                    ) {
-                        body.positions[i] = x;
-                        body.velocities[i] = v;
-                        sc.touched_nodes[k] = true;
-                        sc.last_contact[k] = Some(ContactPoint {
-                            point: c.point,
-                            normal: c.normal,
-                            collider: candidates[c.candidate].handle,
-                            node: i as u32,
-                        });
-                        sc.touched_colliders[c.candidate] = true;
-                        let cand = &candidates[c.candidate];
-                        if cand.dynamic {
-                            if let Some(rb) = cand.body(&sc.motions).and_then(|b| bodies.get_mut(b))
-                            {
-                                rb.apply_impulse_at_point(-c.impulse, c.point, true);
-                            }
-                        }
-                    }
+                    ) else {
+                        continue;
+                    };
+                    body.positions[n_i] = x;
+                    c.solve(
+                        &mut body.velocities,
+                        s1,
+                        dt,
+                        &candidates,
+                        &sc.motions,
+                        bodies,
+                    );
+                    contact::refresh_poses(
+                        &mut candidates,
+                        c.candidate,
+                        s1,
+                        dt,
+                        &sc.motions,
+                        bodies,
+                    );
+                    sc.touched_nodes[k] = true;
+                    sc.last_contact[k] = Some(ContactPoint {
+                        point: c.point,
+                        normal: c.normal,
+                        collider: candidates[c.candidate].handle,
+                        node: i,
+                    });
+                    sc.touched_colliders[c.candidate] = true;
                 }
                 for (f, facet) in facets.iter().enumerate() {
                     let (b0, b1) = (sc.facet_start[f] as usize, sc.facet_start[f + 1] as usize);
                     if b0 == b1 {
                         continue;
                     }
-                    let y: [Vector; FACET_ARITY] = std::array::from_fn(|a| {
-                        let i = facet[a] as usize;
-                        body.positions[i] + body.velocities[i] * h
-                    });
                     let im: [Real; FACET_ARITY] = std::array::from_fn(|a| {
                         let i = facet[a];
                         if body.is_attached(i) {
@@ -680,31 +691,53 @@ impl DeformablePipeline {
                     });
                     let x: [Vector; FACET_ARITY] =
                         std::array::from_fn(|a| body.positions[facet[a] as usize]);
-                    if let Some(fc) =
-                        contact::resolve_facet(&x, &y, &im, &sc.facet_cands[b0..b1], &candidates)
-                    {
-                        let mut gained = Vector::ZERO;
-                        for a in 0..FACET_ARITY {
+                    // The deepest crossing first, then the next one, with the facet where the
+                    // last push left it (each push only moves it further in): a flat face
+                    // brings several features across one facet at once.
+                    for _ in 0..FACET_PASSES {
+                        let y: [Vector; FACET_ARITY] = std::array::from_fn(|a| {
                             let i = facet[a] as usize;
-                            let dv = fc.normal * (fc.weights[a] * im[a] * fc.lambda / h);
-                            body.velocities[i] += dv;
-                            gained += dv * body.masses[i] * if im[a] > 0.0 { 1.0 } else { 0.0 };
-                        }
+                            body.positions[i] + body.velocities[i] * h
+                        });
+                        let Some(mut c) = contact::resolve_facet(
+                            facet,
+                            &x,
+                            &y,
+                            &im,
+                            h,
+                            s1,
+                            dt,
+                            &sc.facet_cands[b0..b1],
+                            &candidates,
+                            &sc.motions,
+                            bodies,
+                        ) else {
+                            break;
+                        };
+                        c.solve(
+                            &mut body.velocities,
+                            s1,
+                            dt,
+                            &candidates,
+                            &sc.motions,
+                            bodies,
+                        );
+                        contact::refresh_poses(
+                            &mut candidates,
+                            c.candidate,
+                            s1,
+                            dt,
+                            &sc.motions,
+                            bodies,
+                        );
                         facet_contacts += 1;
                         body.contacts.push(ContactPoint {
-                            point: fc.point,
-                            normal: -fc.normal,
-                            collider: candidates[fc.candidate].handle,
+                            point: c.point,
+                            normal: c.normal,
+                            collider: candidates[c.candidate].handle,
                             node: u32::MAX,
                         });
-                        sc.touched_colliders[fc.candidate] = true;
-                        let cand = &candidates[fc.candidate];
-                        if cand.dynamic {
-                            if let Some(rb) = cand.body(&sc.motions).and_then(|b| bodies.get_mut(b))
-                            {
-                                rb.apply_impulse_at_point(-gained, fc.point, true);
-                            }
-                        }
+                        sc.touched_colliders[c.candidate] = true;
                     }
                 }
                 time_contacts += tc.elapsed().as_secs_f64();

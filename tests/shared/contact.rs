@@ -304,3 +304,259 @@ fn sensors_are_ignored() {
         "it fell through the sensor"
     );
 }
+
+/// What a rigid body dropped on a soft slab did.
+#[derive(Debug)]
+struct Drop {
+    /// Slab thickness at rest before the drop, and the height of the body's centre at release.
+    thickness: Real,
+    release: Real,
+    /// Highest the body's centre rose after release.
+    highest: Real,
+    /// Deepest the body's lowest point went below the slab's top surface under it.
+    deepest: Real,
+    /// At the end: the body's lowest point above the slab's top under it (negative: below),
+    /// how far its centre moved in the last second, and whether it is still over the slab.
+    gap: Real,
+    moved: Real,
+    over: bool,
+    inverted: usize,
+    facet_contacts: usize,
+}
+
+/// Height of the slab's top surface (its upward-facing facets) above the point `p`.
+fn surface_below(d: &crate::dim::Deformable, p: Vector) -> Option<Real> {
+    let flat = |q: Vector| q - UP * q.dot(UP);
+    let mut best: Option<Real> = None;
+    for f in d.mesh().boundary_facets() {
+        let q: Vec<Vector> = f.iter().map(|&i| d.positions()[i as usize]).collect();
+        let n = math::facet_normal(&q);
+        if n.dot(UP) <= 0.5 * n.length() {
+            continue;
+        }
+        let flat_q: Vec<Vector> = q.iter().map(|x| flat(*x)).collect();
+        let w = math::facet_barycentric(&flat_q, flat(p));
+        if w.iter().any(|&w| w < -1e-6) {
+            continue;
+        }
+        let h: Real = q.iter().zip(w.iter()).map(|(x, w)| x.dot(UP) * w).sum();
+        best = Some(best.map_or(h, |b: Real| b.max(h)));
+    }
+    best
+}
+
+/// Drops `collider` (its centre `drop` above the top) on a 1 m wide, 0.2 m thick slab of
+/// Young's modulus `young_modulus` resting on the ground, and watches it for `seconds`.
+fn drop_on_slab(collider: ColliderBuilder, young_modulus: Real, drop: Real, seconds: Real) -> Drop {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    ground(&mut world, 0.5, 0.0);
+    let mut half = Vector::splat(0.5);
+    half[1] = 0.1;
+    let mut res = [6; DIM];
+    res[1] = 3;
+    let slab = DeformableBuilder::cuboid(half, res)
+        .model(ElementModel::EdgeRepulsion)
+        .material(Material {
+            density: 1000.0,
+            young_modulus,
+            damping_ratio: 0.3,
+            ..Default::default()
+        })
+        .translation(UP * 0.1)
+        .build()
+        .unwrap();
+    let h = world.insert(slab);
+    for _ in 0..60 {
+        world.step();
+    }
+    let top = |world: &DeformableWorld| {
+        world.deformables[h]
+            .positions()
+            .iter()
+            .map(|p| p.dot(UP))
+            .fold(Real::NEG_INFINITY, Real::max)
+    };
+    let thickness = top(&world);
+    let release = thickness + drop;
+    let (rigid, collider) = world.physics.insert(
+        RigidBodyBuilder::dynamic().translation(UP * release),
+        collider.friction(0.5),
+    );
+    // The body's lowest point and the slab's surface under it.
+    let lowest = |world: &DeformableWorld| {
+        let co = &world.physics.colliders[collider];
+        let pose = co.position();
+        let foot = if let Some(b) = co.shape().as_cuboid() {
+            (0..1usize << DIM)
+                .map(|bits| {
+                    let mut p = b.half_extents;
+                    for d in 0..DIM {
+                        if bits & (1 << d) != 0 {
+                            p[d] = -p[d];
+                        }
+                    }
+                    pose.transform_point(p)
+                })
+                .min_by(|a, b| a.dot(UP).total_cmp(&b.dot(UP)))
+                .unwrap()
+        } else {
+            let r = co.shape().as_ball().expect("a box or a ball").radius;
+            pose.translation - UP * r
+        };
+        (foot, surface_below(&world.deformables[h], foot))
+    };
+    let steps = (seconds * 60.0) as usize;
+    let mut out = Drop {
+        thickness,
+        release,
+        highest: Real::NEG_INFINITY,
+        deepest: 0.0,
+        gap: 0.0,
+        moved: 0.0,
+        over: true,
+        inverted: 0,
+        facet_contacts: 0,
+    };
+    let mut history = Vec::new();
+    for _ in 0..steps {
+        let r = world.step().get(h).cloned().unwrap();
+        out.inverted = out.inverted.max(r.inverted_elements);
+        out.facet_contacts += r.facet_contacts;
+        let centre = world.physics.bodies[rigid].translation();
+        out.highest = out.highest.max(centre.dot(UP));
+        history.push(centre);
+        let (foot, surface) = lowest(&world);
+        if let Some(s) = surface {
+            out.deepest = out.deepest.max(s - foot.dot(UP));
+        }
+    }
+    let (foot, surface) = lowest(&world);
+    out.over = surface.is_some();
+    out.gap = surface.map_or(Real::NAN, |s| foot.dot(UP) - s);
+    out.moved = history[history.len() - 1].distance(history[history.len() - 61]);
+    out
+}
+
+/// A dropped body rests on the slab: never deep in it, never higher than released, still at
+/// the end (less than 1 cm in the last second), on the surface, with no inverted element.
+fn assert_rests(name: &str, o: &Drop) {
+    assert_held_up(name, o);
+    assert!(o.moved < 1e-2, "{name}: still moving: {o:?}");
+}
+
+/// A dropped body is held up by the slab's surface: over it at the end, on it within 3% of the
+/// slab's thickness, never deeper, never higher than released, no inverted element.
+fn assert_held_up(name: &str, o: &Drop) {
+    assert!(o.over, "{name}: left the slab: {o:?}");
+    assert!(
+        o.deepest < 0.03 * o.thickness,
+        "{name}: went {} below the surface: {o:?}",
+        o.deepest
+    );
+    assert!(
+        o.gap.abs() < 0.03 * o.thickness,
+        "{name}: rests {} off the surface: {o:?}",
+        o.gap
+    );
+    assert!(
+        o.highest <= o.release + 1e-4,
+        "{name}: rose above its release height: {o:?}"
+    );
+    assert_eq!(o.inverted, 0, "{name}: inverted elements: {o:?}");
+}
+
+#[test]
+fn a_light_box_dropped_on_a_soft_slab_rests_on_it() {
+    // Lighter than any surface node (about 1 kg each in 3D): the node contacts alone used to
+    // launch it.
+    let o = drop_on_slab(cuboid(Vector::splat(0.1)).density(10.0), 5e4, 0.5, 6.0);
+    assert_rests("light box", &o);
+}
+
+#[test]
+fn a_heavy_box_dropped_on_a_soft_slab_rests_on_it() {
+    // A hundred times heavier than the light one.
+    let o = drop_on_slab(cuboid(Vector::splat(0.1)).density(1000.0), 5e4, 0.5, 6.0);
+    assert_rests("heavy box", &o);
+}
+
+#[test]
+fn a_ball_dropped_on_a_soft_slab_is_held_up_by_its_facets() {
+    // Between surface nodes: only the facet test can hold it. A light ball does not dent the
+    // slab enough to stay put on the slightly uneven surface of a resting coarse mesh (it rolls
+    // slowly, without friction losses to speak of), so only the heavy one must come to rest.
+    let light = drop_on_slab(ColliderBuilder::ball(0.1).density(100.0), 5e4, 0.5, 6.0);
+    assert!(light.facet_contacts > 0, "no facet contact: {light:?}");
+    assert_held_up("light ball", &light);
+    let heavy = drop_on_slab(ColliderBuilder::ball(0.1).density(10000.0), 5e4, 0.5, 6.0);
+    assert!(heavy.facet_contacts > 0, "no facet contact: {heavy:?}");
+    assert_rests("heavy ball", &heavy);
+}
+
+/// Total linear momentum and kinetic plus elastic energy of a rigid body thrown at a free soft
+/// cube without gravity, every step.
+fn throw_at_cube(collider: ColliderBuilder, speed: Real) -> Vec<(Vector, Real)> {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    world.physics.gravity = Vector::ZERO;
+    let cube = DeformableBuilder::cuboid(Vector::splat(0.25), [4; DIM])
+        .model(ElementModel::EdgeRepulsion)
+        .material(Material {
+            density: 100.0,
+            young_modulus: 2e4,
+            damping_ratio: 0.3,
+            ..Default::default()
+        })
+        .build()
+        .unwrap();
+    let h = world.insert(cube);
+    // Off the cube's axis, so that it also turns.
+    let mut start = -UP * 0.05;
+    start[0] = -0.6;
+    let mut velocity = Vector::ZERO;
+    velocity[0] = speed;
+    let (rigid, _) = world.physics.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(start)
+            .linvel(velocity),
+        collider,
+    );
+    let mut out = Vec::new();
+    for _ in 0..90 {
+        let r = world.step().get(h).cloned().unwrap();
+        let b = &world.physics.bodies[rigid];
+        let d = &world.deformables[h];
+        out.push((
+            b.linvel() * b.mass() + d.linear_momentum(),
+            b.kinetic_energy() + r.kinetic_energy + r.elastic_energy,
+        ));
+    }
+    out
+}
+
+#[test]
+fn a_body_thrown_at_a_free_cube_conserves_momentum_and_creates_no_energy() {
+    for (name, collider) in [
+        ("box", cuboid(Vector::splat(0.1)).density(100.0)),
+        ("ball", ColliderBuilder::ball(0.1).density(100.0)),
+    ] {
+        let o = throw_at_cube(collider, 3.0);
+        let (p0, e0) = o[0];
+        for (k, (p, e)) in o.iter().enumerate() {
+            assert!(
+                (*p - p0).length() < 1e-3 * p0.length(),
+                "{name}: momentum {p:?} at step {k}, thrown with {p0:?}"
+            );
+            assert!(
+                *e <= e0 * (1.0 + 1e-3),
+                "{name}: energy {e} at step {k}, thrown with {e0}"
+            );
+        }
+        let (_, e) = o[o.len() - 1];
+        assert!(
+            e < 0.5 * e0,
+            "{name}: it never hit the cube ({e} of {e0} J left)"
+        );
+    }
+}
