@@ -37,6 +37,11 @@
 //! }
 //! assert!(world.deformables[jelly].positions().iter().all(|p| p.is_finite()));
 //! ```
+//!
+//! Cargo features: `dim2` and `dim3` (default), `rerun` (logging to the Rerun viewer), `fem`
+//! (rapier's FEM soft bodies as peers of the scene runner) and `parallel`: element forces of
+//! large bodies on rayon's threads, with rapier's own `parallel`. The parallel forces equal
+//! the serial ones bit for bit whatever the number of threads (see [`dim3::model`]).
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
 // `src/shared/` is mounted twice on purpose, once per dimension (DESIGN.md §2).
