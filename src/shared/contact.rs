@@ -330,13 +330,7 @@ pub(crate) fn candidate<'a>(
     let drift = match motion {
         Some(m) if motions[m].kind == MotionKind::Dynamic => bodies
             .get(motions[m].handle)
-            .filter(|b| !b.is_sleeping())
-            .map_or(Vector::ZERO, |b| {
-                let props = b.mass_properties();
-                (gravity * b.gravity_scale() * props.effective_mass() + b.user_force())
-                    * props.effective_inv_mass
-                    * dt
-            }),
+            .map_or(Vector::ZERO, |b| rapier_drift(b, gravity, dt)),
         _ => Vector::ZERO,
     };
     let (pose0, mut pose1) = match motion {
@@ -603,6 +597,22 @@ pub(crate) struct Contact {
 }
 
 impl Contact {
+    /// Adds the dynamic body it pushed (with a non-zero normal impulse), if any, to `pushed`.
+    pub fn note_pushed(
+        &self,
+        candidates: &[Candidate<'_>],
+        motions: &[BodyMotion],
+        pushed: &mut Vec<RigidBodyHandle>,
+    ) {
+        if self.normal_impulse > 0.0 {
+            if let Some(b) = candidates[self.candidate].rigid(motions) {
+                if !pushed.contains(&b) {
+                    pushed.push(b);
+                }
+            }
+        }
+    }
+
     fn velocity(&self, velocities: &[Vector]) -> Vector {
         (0..FACET_ARITY)
             .map(|a| velocities[self.nodes[a] as usize] * self.weights[a])
@@ -824,6 +834,41 @@ pub(crate) fn resolve_node(
         normal_impulse: 0.0,
         friction_impulse: Vector::ZERO,
     })
+}
+
+/// Velocity rapier's step adds to a dynamic body: gravity and user forces (torques are left
+/// out), none while it sleeps.
+pub(crate) fn rapier_drift(body: &RigidBody, gravity: Vector, dt: Real) -> Vector {
+    if !body.is_dynamic() || body.is_sleeping() {
+        return Vector::ZERO;
+    }
+    let props = body.mass_properties();
+    (gravity * body.gravity_scale() * props.effective_mass() + body.user_force())
+        * props.effective_inv_mass
+        * dt
+}
+
+/// Makes rapier's step move a dynamic body that took contact impulses as the contacts
+/// predicted: with its velocity plus the whole [`rapier_drift`] over the step.
+///
+/// Rapier integrates in `N` substeps, so a body gains `drift` of velocity but moves only
+/// `(N + 1)/(2N) · drift · dt` of it. The contacts that just held a resting body set its
+/// velocity to `−drift`, for it to end the step at rest where it is; rapier would lift it by
+/// the difference and leave it at rest there, to fall back the next step, and so on (a resting
+/// body kept reporting a downward velocity of about `(N − 1)/(2N) · g dt`). The body is moved
+/// back by that difference beforehand.
+pub(crate) fn match_rapier_integration(
+    body: &mut RigidBody,
+    gravity: Vector,
+    dt: Real,
+    solver_iterations: usize,
+) {
+    let n = (solver_iterations + body.additional_solver_iterations()).max(1) as Real;
+    let lag = rapier_drift(body, gravity, dt) * (dt * (n - 1.0) / (2.0 * n));
+    if lag != Vector::ZERO {
+        let t = body.translation();
+        body.set_translation(t + lag, false);
+    }
 }
 
 /// After an impulse to the dynamic body behind candidate `ci`, moves that body's candidates to

@@ -88,6 +88,8 @@ struct Scratch {
     surface_slot: Vec<u32>,
     touched_nodes: Vec<bool>,
     touched_colliders: Vec<bool>,
+    /// Dynamic bodies that took contact impulses this step.
+    pushed: Vec<RigidBodyHandle>,
     last_contact: Vec<Option<ContactPoint>>,
     targets: Vec<Vector>,
 }
@@ -264,6 +266,7 @@ impl DeformablePipeline {
         self.report.deformables.clear();
         let margin = moving_margin(bodies, colliders, dt);
         let indexed = contact::broad_phase_is_current(broad_phase, bodies, colliders);
+        self.scratch.pushed.clear();
         for (handle, body) in deformables.iter_mut() {
             let detached = body.prune_attachments(bodies);
             if body.sleeping
@@ -339,6 +342,11 @@ impl DeformablePipeline {
             }
             body.touching = now;
             self.report.deformables.push((handle, body.report.clone()));
+        }
+        for h in &self.scratch.pushed {
+            if let Some(rb) = bodies.get_mut(*h) {
+                contact::match_rapier_integration(rb, gravity, dt, params.num_solver_iterations);
+            }
         }
         self.report.wall_time = start.elapsed().as_secs_f64();
         &self.report
@@ -626,7 +634,13 @@ impl DeformablePipeline {
                 for c in candidates.iter_mut() {
                     c.advance(s1, dt, &sc.motions, bodies);
                 }
-                for (k, &i) in surface.iter().enumerate() {
+                // Sequential impulses in one fixed order are lopsided (a box landing flat on a
+                // soft cube was kicked sideways and kept swaying): the sweeps alternate.
+                let backward = substeps % 2 == 1;
+                let order = |len: usize, j: usize| if backward { len - 1 - j } else { j };
+                for j in 0..surface.len() {
+                    let k = order(surface.len(), j);
+                    let i = surface[k];
                     let (b0, b1) = (sc.node_start[k] as usize, sc.node_start[k + 1] as usize);
                     if b0 == b1 {
                         continue;
@@ -667,6 +681,7 @@ impl DeformablePipeline {
                         &sc.motions,
                         bodies,
                     );
+                    c.note_pushed(&candidates, &sc.motions, &mut sc.pushed);
                     sc.touched_nodes[k] = true;
                     sc.last_contact[k] = Some(ContactPoint {
                         point: c.point,
@@ -676,7 +691,9 @@ impl DeformablePipeline {
                     });
                     sc.touched_colliders[c.candidate] = true;
                 }
-                for (f, facet) in facets.iter().enumerate() {
+                for j in 0..facets.len() {
+                    let f = order(facets.len(), j);
+                    let facet = &facets[f];
                     let (b0, b1) = (sc.facet_start[f] as usize, sc.facet_start[f + 1] as usize);
                     if b0 == b1 {
                         continue;
@@ -730,6 +747,7 @@ impl DeformablePipeline {
                             &sc.motions,
                             bodies,
                         );
+                        c.note_pushed(&candidates, &sc.motions, &mut sc.pushed);
                         facet_contacts += 1;
                         body.contacts.push(ContactPoint {
                             point: c.point,
