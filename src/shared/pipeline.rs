@@ -92,6 +92,11 @@ struct Scratch {
     pushed: Vec<RigidBodyHandle>,
     last_contact: Vec<Option<ContactPoint>>,
     targets: Vec<Vector>,
+    /// Per attachment: index into `motions` (or `usize::MAX`).
+    attachment_motion: Vec<usize>,
+    /// Colliders touched this step (for the events), and the contacts being assembled.
+    now: Vec<ColliderHandle>,
+    contacts: Vec<ContactPoint>,
 }
 
 /// Most feature crossings resolved per surface facet and substep.
@@ -319,28 +324,29 @@ impl DeformablePipeline {
             body.report.detached = detached;
             body.report.attached_nodes = body.attachments.len();
             // Contact events: the colliders touched this step against those of the last one.
-            let mut now: Vec<ColliderHandle> = self
-                .scratch
-                .near
-                .iter()
-                .zip(&self.scratch.touched_colliders)
-                .filter(|(_, t)| **t)
-                .map(|(h, _)| *h)
-                .collect();
-            now.sort_unstable_by_key(|h| h.into_raw_parts());
-            for c in body.touching.iter().filter(|c| !now.contains(c)) {
+            let sc = &mut self.scratch;
+            sc.now.clear();
+            sc.now.extend(
+                sc.near
+                    .iter()
+                    .zip(&sc.touched_colliders)
+                    .filter(|(_, t)| **t)
+                    .map(|(h, _)| *h),
+            );
+            sc.now.sort_unstable_by_key(|h| h.into_raw_parts());
+            for c in body.touching.iter().filter(|c| !sc.now.contains(c)) {
                 events.handle_contact_event(DeformableContactEvent::Stopped {
                     deformable: handle,
                     collider: *c,
                 });
             }
-            for c in now.iter().filter(|c| !body.touching.contains(c)) {
+            for c in sc.now.iter().filter(|c| !body.touching.contains(c)) {
                 events.handle_contact_event(DeformableContactEvent::Started {
                     deformable: handle,
                     collider: *c,
                 });
             }
-            body.touching = now;
+            std::mem::swap(&mut body.touching, &mut sc.now);
             self.report.deformables.push((handle, body.report.clone()));
         }
         for h in &self.scratch.pushed {
@@ -392,11 +398,11 @@ impl DeformablePipeline {
             motions.push(BodyMotion::new(handle, b, dt));
             Some(motions.len() - 1)
         };
-        let attachment_motion: Vec<usize> = body
-            .attachments
-            .iter()
-            .map(|a| motion_of(&mut sc.motions, a.body, bodies).unwrap_or(usize::MAX))
-            .collect();
+        sc.attachment_motion.clear();
+        for a in &body.attachments {
+            let m = motion_of(&mut sc.motions, a.body, bodies).unwrap_or(usize::MAX);
+            sc.attachment_motion.push(m);
+        }
 
         // Broad phase, once per deformable and then once per surface node.
         let surface = body.mesh.boundary_nodes();
@@ -587,7 +593,7 @@ impl DeformablePipeline {
             // Bound nodes follow their bones.
             sc.targets.clear();
             for (k, a) in body.attachments.iter().enumerate() {
-                let m = attachment_motion[k];
+                let m = sc.attachment_motion[k];
                 if m == usize::MAX {
                     sc.targets.push(Vector::NAN);
                     continue;
@@ -775,8 +781,12 @@ impl DeformablePipeline {
         }
 
         let ti = Instant::now();
-        let node_contacts: Vec<ContactPoint> = sc.last_contact.iter().flatten().copied().collect();
-        body.contacts.splice(0..0, node_contacts);
+        // Node contacts first, then the facet contacts gathered during the substeps.
+        sc.contacts.clear();
+        sc.contacts
+            .extend(sc.last_contact.iter().flatten().copied());
+        sc.contacts.append(&mut body.contacts);
+        std::mem::swap(&mut body.contacts, &mut sc.contacts);
         // Non-finite, or so far out that it can only be a blow-up (|x| or |v| above 1e8).
         let sane = |v: &Vector| v.is_finite() && v.abs().max_element() < 1e8;
         let finite = body.positions.iter().all(sane) && body.velocities.iter().all(sane);
