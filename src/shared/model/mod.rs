@@ -201,9 +201,9 @@ impl NodeBounds {
 ///
 /// The cost is counted in linear-spring evaluations, each cell weighted by what it costs
 /// relative to a spring (callgrind, 3D): a cell of centroid springs 5, an edge-repulsion cell
-/// 20, a shape-based cell 30. The threshold, about 0.2 ms of serial work, is met by 3D lattices
-/// of 9 nodes per edge with edge repulsion or shape matching, 12 with centroid springs and
-/// about 17 with springs.
+/// 20, a shape-based cell 30. The threshold, about 0.2 ms of serial work on the machine it was
+/// measured on, is met by 3D lattices (`DeformableBuilder::cuboid`) from 7 nodes per edge with
+/// shape matching, 8 with edge repulsion, 11 with centroid springs and 18 with springs.
 pub const PARALLEL_MIN_WORK: usize = 1 << 15;
 
 /// The built, model-specific element data (rest data and any per-cell state).
