@@ -180,8 +180,11 @@ pub mod math {
                 a += Matrix::from_diagonal(Vector::splat(r.dot(big_r))) - outer(big_r, *r);
                 rhs += big_r.cross(*r);
             }
+            // Relative to the cell's size: an absolute threshold stalls the fit at the warm
+            // start for cells smaller than a few centimetres (det ∝ size⁶).
             let det = a.determinant();
-            if !det.is_finite() || det.abs() < Real::EPSILON {
+            let trace = a.x_axis.x + a.y_axis.y + a.z_axis.z;
+            if !det.is_finite() || det.abs() <= Real::EPSILON * (trace * trace * trace).abs() {
                 break;
             }
             let w = a.inverse() * rhs;

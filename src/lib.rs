@@ -47,6 +47,7 @@
 // `src/shared/` is mounted twice on purpose, once per dimension (DESIGN.md §2).
 #![allow(clippy::duplicate_mod)]
 
+pub mod beam;
 #[cfg(feature = "dim2")]
 pub mod dim2;
 #[cfg(feature = "dim3")]

@@ -36,7 +36,8 @@ impl Spread {
 /// What one run of one scene with one model measured.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Record {
-    /// Scene name (`fall`, `limb`, `crush`, `manipulator`, `dt-sweep`, `rotation-error`).
+    /// Scene name (`fall`, `limb`, `crush`, `manipulator`, `dt-sweep`, `rotation-error`,
+    /// `cantilever`).
     pub scene: String,
     /// 2 or 3.
     pub dim: usize,
@@ -44,7 +45,7 @@ pub struct Record {
     pub model: String,
     /// Rotation fit of the shape-based model (`1`, `2`, `3` iterations or `polar`).
     pub iterations: Option<String>,
-    /// Nodes per edge of the lattice.
+    /// Nodes per edge of the lattice (cantilever: nodes across the beam's thickness).
     pub res: usize,
     /// Nodes (particles) of the body.
     pub nodes: usize,
@@ -98,6 +99,15 @@ pub struct Record {
     pub max_anchor_error: Option<f64>,
     /// Spurious angular acceleration of the element forces, rad/s² (rotation-error).
     pub spurious: Option<Spread>,
+    /// Static tip sag of the cantilever: mean downward displacement of its free end's nodes, m.
+    pub sag: Option<f64>,
+    /// Euler–Bernoulli tip sag of the same beam ([`crate::beam::euler_bernoulli_tip_sag`]), m.
+    pub sag_theory: Option<f64>,
+    /// `(sag − sag_theory) / sag_theory` ([`crate::beam::sag_error`]).
+    pub sag_error: Option<f64>,
+    /// Range (max − min) of the tip sag over the cantilever's settling window, over the sag: how
+    /// far from static the measurement is.
+    pub sag_wobble: Option<f64>,
     /// Kinetic energy at the end, J.
     pub final_kinetic_energy: f64,
     /// Whether the state turned non-finite.

@@ -26,6 +26,8 @@ pub enum Scene {
     DtSweep,
     /// The shape-based element's spurious angular acceleration (shape paper, Table 1).
     RotationError,
+    /// A clamped beam sagging under its own weight, against Euler–Bernoulli.
+    Cantilever,
 }
 
 /// Runs the paper's scenes with sinew's models and rapier's soft bodies.
@@ -46,7 +48,8 @@ pub struct Args {
     /// Rotation fits of shape-matching: 1, 2, 3 or polar (default: 2).
     #[arg(long, num_args = 1..)]
     pub iterations: Vec<String>,
-    /// Nodes per edge of the cube (limb: nodes along the limb).
+    /// Nodes per edge of the cube (limb: nodes along the limb; cantilever: nodes across the
+    /// beam's thickness).
     #[arg(long)]
     pub res: Option<usize>,
     /// Step length, s.
@@ -198,6 +201,10 @@ pub fn to_json(r: &Record) -> Value {
         "spurious_std": spurious.map(|s| s.std),
         "spurious_max": spurious.map(|s| s.max),
         "max_anchor_error": r.max_anchor_error,
+        "sag": r.sag,
+        "sag_theory": r.sag_theory,
+        "sag_error": r.sag_error,
+        "sag_wobble": r.sag_wobble,
         "final_kinetic_energy": r.final_kinetic_energy,
         "nan": r.nan,
         "exploded": r.exploded,
@@ -216,6 +223,7 @@ fn table_header(scene: Scene) -> String {
         Scene::Manipulator => "  rest m  shape err  failure strike",
         Scene::DtSweep => "  mode   dt ms  apex m  rest m   pen mm  failure ms",
         Scene::RotationError => "  k/m      dt ms  mean rad/s²  std rad/s²  max rad/s²",
+        Scene::Cantilever => "  sag mm  theory mm  ratio   error  wobble",
     };
     format!(
         "dim {:<23} {:>5} {:>6} {:>6} {:>9} {:>9} {:>9} {:>7}{extra}  flags",
@@ -270,6 +278,14 @@ fn table_row(scene: Scene, r: &Record) -> String {
                 s.max
             )
         }
+        Scene::Cantilever => format!(
+            "  {:>6}  {:>9}  {:>5}  {:>6}  {:>6}",
+            opt(r.sag.map(|s| s * 1e3), 2),
+            opt(r.sag_theory.map(|s| s * 1e3), 2),
+            opt(r.sag.zip(r.sag_theory).map(|(s, t)| s / t), 3),
+            opt(r.sag_error.map(|e| e * 100.0), 1) + "%",
+            r.sag_wobble.map_or("—".to_string(), |w| format!("{w:.0e}"))
+        ),
     };
     let mut flags = Vec::new();
     let why;
@@ -306,8 +322,8 @@ macro_rules! dimension_runner {
             use sinew::record::Record;
             use sinew::$dim::math::Real;
             use sinew::$dim::scenes::{
-                dt_sweep, CrushScene, FallScene, LimbScene, ManipulatorScene, RapierModel,
-                RotationErrorScene, Subject, CRUSH_MASSES,
+                dt_sweep, CantileverScene, CrushScene, FallScene, LimbScene, ManipulatorScene,
+                RapierModel, RotationErrorScene, Subject, CRUSH_MASSES,
             };
             use sinew::$dim::{DeformableWorld, ElementModel, RotationFit};
 
@@ -497,6 +513,19 @@ macro_rules! dimension_runner {
                                 strikes,
                                 period: d.period * scale,
                                 settle: d.settle * scale,
+                                ..d
+                            };
+                            vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
+                        }
+                        Scene::Cantilever => {
+                            let d = CantileverScene::default();
+                            let scene = CantileverScene {
+                                subject,
+                                resolution: args.res.unwrap_or(d.resolution),
+                                dt: args.dt.map_or(d.dt, |v| v as Real),
+                                seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                                young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
+                                poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]

@@ -7,7 +7,7 @@
 //!     [--strikes N] [--k-over-m K ...] [--rrd DIR] [--json]
 //! ```
 //!
-//! Scenes: `fall`, `limb`, `crush`, `manipulator`, `dt-sweep`, `rotation-error` (see
+//! Scenes: `fall`, `limb`, `crush`, `manipulator`, `dt-sweep`, `rotation-error`, `cantilever` (see
 //! `docs/STABILITY.md` for what each measures and the tables they print).
 
 mod cli;

@@ -1,6 +1,7 @@
 //! Tests written once for both dimensions: `crate::dim` is `sinew::dim2` or `sinew::dim3`.
 
 mod bones;
+mod cantilever;
 mod contact;
 mod elements;
 mod errors;

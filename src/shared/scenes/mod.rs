@@ -15,7 +15,9 @@
 //! | [`ManipulatorScene`] | an element stays inverted after a strike | strike number |
 //! | [`dt_sweep`] | the fall explodes, leaves an element inverted or sinks | the smallest such dt, ms |
 //! | [`RotationErrorScene`] | (accuracy) spurious angular acceleration of the rotation fit | — |
+//! | [`CantileverScene`] | (accuracy) static sag against Euler–Bernoulli; fails only if it does not settle | — |
 
+mod cantilever;
 mod crush;
 mod fall;
 mod limb;
@@ -25,7 +27,9 @@ mod rotation_error;
 mod sim;
 mod subject;
 
+pub use crate::beam::{euler_bernoulli_tip_sag, sag_error};
 pub use crate::record::{Record, Spread};
+pub use cantilever::{CantileverScene, SETTLED_WOBBLE};
 pub use crush::{CrushScene, CRUSH_MASSES};
 pub use fall::{dt_sweep, FallScene, DT_SWEEP_MS};
 pub use limb::LimbScene;

@@ -1,0 +1,54 @@
+//! The cantilever: a clamped beam's static sag against Euler–Bernoulli (issue 6, acceptance 4).
+
+use crate::dim::math::Real;
+use crate::dim::scenes::CantileverScene;
+use crate::dim::BuildError;
+
+#[test]
+fn scene_theory_is_the_closed_form_for_a_rectangle() {
+    let s = CantileverScene::default();
+    let (rho, g, l, e, h) = (
+        s.density as f64,
+        s.gravity as f64,
+        s.length as f64,
+        s.young_modulus as f64,
+        s.thickness as f64,
+    );
+    let expected = 3.0 * rho * g * l.powi(4) / (2.0 * e * h * h);
+    assert!((s.theory_sag() - expected).abs() < 1e-9 * expected);
+    // The default keeps linear theory fair: the sag is 1–3 % of the length.
+    let ratio = s.theory_sag() / l;
+    assert!((0.01..=0.03).contains(&ratio), "sag/L = {ratio}");
+}
+
+#[test]
+fn bad_beams_are_build_errors() {
+    let d = CantileverScene::default();
+    let bad = [
+        CantileverScene { resolution: 1, ..d },
+        CantileverScene {
+            thickness: 0.0,
+            ..d
+        },
+        CantileverScene {
+            length: Real::NAN,
+            ..d
+        },
+        CantileverScene {
+            young_modulus: 0.0,
+            ..d
+        },
+        CantileverScene { seconds: -1.0, ..d },
+        CantileverScene {
+            relaxation: -1.0,
+            ..d
+        },
+    ];
+    for scene in bad {
+        let e = scene.run().expect_err("a bad beam must not run");
+        assert!(
+            matches!(e, BuildError::InvalidParameter { .. }),
+            "{scene:?}: {e}"
+        );
+    }
+}
