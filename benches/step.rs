@@ -1,5 +1,5 @@
 //! One step of the `fall` scene's box, resting on the ground, per model, 2D and 3D, at
-//! resolutions 5, 9, 17 and 33 nodes per edge (up to 32³·5 = 163 840 tetrahedra), for each of
+//! resolutions 5, 9, 17 and 33 nodes per edge (up to 32³·6 = 196 608 tetrahedra), for each of
 //! sinew's element models and rapier's own soft-body models on the same mesh.
 //!
 //! Three groups per dimension:

@@ -21,7 +21,7 @@ use plotters::prelude::*;
 use serde_json::json;
 use sinew::dim3::math::{Real, Vector};
 use sinew::dim3::scenes::metrics::{trajectory_error, uniaxial_volume_change};
-use sinew::dim3::scenes::{CrushScene, FallScene, RotationErrorScene, Subject};
+use sinew::dim3::scenes::{CantileverScene, CrushScene, FallScene, RotationErrorScene, Subject};
 use sinew::dim3::{ElementModel, RotationFit, ShapeDamping};
 
 #[derive(Parser, Debug)]
@@ -33,7 +33,7 @@ struct Args {
     /// Output folder (charts go to <out>/charts).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Only these metrics: fall, crush, rotation.
+    /// Only these metrics: fall, crush, sag, rotation.
     #[arg(long, num_args = 1..)]
     only: Vec<String>,
 }
@@ -87,6 +87,40 @@ const ROTATION: Metric = Metric {
     title: "rotation-error drop (k/m 1e4): spurious angular acceleration",
     y: "mean spurious acceleration, rad/s²",
 };
+
+const SAG: Metric = Metric {
+    key: "cantilever-sag",
+    title: "cantilever (10:1, clamped by a bone): |static tip sag / Euler-Bernoulli − 1|",
+    y: "relative sag error",
+};
+
+/// The cantilever: static sag under gravity against beam theory, at a few resolutions
+/// (nodes across the thickness).
+fn sag(quick: bool) -> Vec<Point> {
+    let resolutions: &[usize] = if quick { &[3] } else { &[3, 5] };
+    let mut out = Vec::new();
+    for subject in Subject::all() {
+        for &res in resolutions {
+            progress(&format!("cantilever {} res {res}", subject.name()));
+            let scene = CantileverScene {
+                subject,
+                resolution: res,
+                ..CantileverScene::default()
+            };
+            let r = scene.run().expect("the cantilever scene builds");
+            out.push(Point {
+                metric: SAG.key,
+                model: subject.name().to_string(),
+                res,
+                dt: scene.dt as f64,
+                cost: r.wall_per_sim_s(),
+                error: r.sag_error.map_or(f64::NAN, f64::abs),
+                failed: r.failure.clone(),
+            });
+        }
+    }
+    out
+}
 
 fn progress(what: &str) {
     eprintln!("[chart] {what}");
@@ -404,6 +438,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .partition(|p| p.metric == CRUSH_VOLUME.key);
         sections.push((&CRUSH_SHAPE, shape));
         sections.push((&CRUSH_VOLUME, volume));
+    }
+    if wanted("sag") {
+        sections.push((&SAG, sag(args.quick)));
     }
     if wanted("rotation") {
         sections.push((&ROTATION, rotation(args.quick)));

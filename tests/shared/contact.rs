@@ -510,6 +510,9 @@ fn throw_at_cube(collider: ColliderBuilder, speed: Real) -> Vec<(Vector, Real)> 
             damping_ratio: 0.3,
             ..Default::default()
         })
+        // Drifting slowly after the hit, it must not fall asleep (sleeping zeroes its
+        // velocity, as rapier's sleep does): this test counts momentum.
+        .can_sleep(false)
         .build()
         .unwrap();
     let h = world.insert(cube);
