@@ -287,7 +287,7 @@ impl CantileverScene {
             (r.nan, "non-finite state"),
             (r.exploded, "exploded"),
             (r.final_inverted_elements > 0, "ended with inverted cells"),
-            (!(wobble <= SETTLED_WOBBLE), "not settled"),
+            (wobble.is_nan() || wobble > SETTLED_WOBBLE, "not settled"),
         ]);
         r.failed = r.failure.is_some();
         Ok(r)
