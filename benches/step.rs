@@ -78,84 +78,62 @@ macro_rules! bench_dimension {
             world
         };
 
-        let mut group = $c.benchmark_group(concat!("fall_step_", $label));
-        group.sample_size(10);
-        group.warm_up_time(Duration::from_millis(500));
-        group.measurement_time(Duration::from_secs(3));
-        for &res in &resolutions {
-            for subject in Subject::all() {
-                let scene = FallScene {
-                    subject,
-                    resolution: res,
-                    drop_height: 0.0,
-                    ..FallScene::default()
-                };
-                group.throughput(Throughput::Elements(elements(res)));
-                // Built on first use: criterion calls the routine only for benchmarks that
-                // pass the command line's filter.
-                let mut world = None;
-                group.bench_with_input(BenchmarkId::new(subject.name(), res), &res, |b, _| {
-                    let world = world.get_or_insert_with(|| settled(&scene));
-                    b.iter(|| world.step().wall_time)
-                });
-            }
-        }
-        group.finish();
-
-        let mut group = $c.benchmark_group(concat!("element_forces_", $label));
-        group.sample_size(20);
-        group.warm_up_time(Duration::from_millis(500));
-        group.measurement_time(Duration::from_secs(2));
-        for &res in &resolutions {
-            for subject in Subject::all() {
-                if !matches!(subject, Subject::Sinew(_)) {
-                    continue;
+        // One group: every subject (or sinew's only) at every resolution, the scene from
+        // `scene(subject, res)`, timing a step or one force evaluation.
+        let mut group_of =
+            |name: &str,
+             samples: usize,
+             seconds: u64,
+             sinew_only: bool,
+             forces_only: bool,
+             scene: &dyn Fn(Subject, usize) -> FallScene| {
+                let mut group = $c.benchmark_group(format!("{name}_{}", $label));
+                group.sample_size(samples);
+                group.warm_up_time(Duration::from_millis(500));
+                group.measurement_time(Duration::from_secs(seconds));
+                for &res in &resolutions {
+                    for subject in Subject::all() {
+                        if sinew_only && !matches!(subject, Subject::Sinew(_)) {
+                            continue;
+                        }
+                        let scene = scene(subject, res);
+                        group.throughput(Throughput::Elements(elements(res)));
+                        // Built on first use: criterion calls the routine only for benchmarks
+                        // that pass the command line's filter.
+                        let mut world = None;
+                        group.bench_with_input(
+                            BenchmarkId::new(subject.name(), res),
+                            &res,
+                            |b, _| {
+                                let world = world.get_or_insert_with(|| settled(&scene));
+                                if forces_only {
+                                    let (_, body) =
+                                        world.deformables.iter_mut().next().expect("one body");
+                                    b.iter(|| body.element_forces()[0])
+                                } else {
+                                    b.iter(|| world.step().wall_time)
+                                }
+                            },
+                        );
+                    }
                 }
-                let scene = FallScene {
-                    subject,
-                    resolution: res,
-                    drop_height: 0.0,
-                    ..FallScene::default()
-                };
-                group.throughput(Throughput::Elements(elements(res)));
-                let mut world = None;
-                group.bench_with_input(BenchmarkId::new(subject.name(), res), &res, |b, _| {
-                    let world = world.get_or_insert_with(|| settled(&scene));
-                    let (_, body) = world.deformables.iter_mut().next().expect("one body");
-                    b.iter(|| body.element_forces()[0])
-                });
+                group.finish();
+            };
+        let resting = |subject: Subject, res: usize| FallScene {
+            subject,
+            resolution: res,
+            drop_height: 0.0,
+            ..FallScene::default()
+        };
+        group_of("fall_step", 10, 3, false, false, &resting);
+        group_of("element_forces", 20, 2, true, true, &resting);
+        group_of("element_update", 10, 3, true, false, &|subject, res| {
+            FallScene {
+                dt: 4.0e-4 / (res - 1) as sinew::$dim::math::Real,
+                fixed_substeps: Some(1),
+                ..resting(subject, res)
             }
-        }
-        group.finish();
-
-        let mut group = $c.benchmark_group(concat!("element_update_", $label));
-        group.sample_size(10);
-        group.warm_up_time(Duration::from_millis(500));
-        group.measurement_time(Duration::from_secs(3));
-        for &res in &resolutions {
-            for subject in Subject::all() {
-                if !matches!(subject, Subject::Sinew(_)) {
-                    continue;
-                }
-                let scene = FallScene {
-                    subject,
-                    resolution: res,
-                    drop_height: 0.0,
-                    dt: 4.0e-4 / (res - 1) as sinew::$dim::math::Real,
-                    fixed_substeps: Some(1),
-                    ..FallScene::default()
-                };
-                group.throughput(Throughput::Elements(elements(res)));
-                // Built on first use: criterion calls the routine only for benchmarks that
-                // pass the command line's filter.
-                let mut world = None;
-                group.bench_with_input(BenchmarkId::new(subject.name(), res), &res, |b, _| {
-                    let world = world.get_or_insert_with(|| settled(&scene));
-                    b.iter(|| world.step().wall_time)
-                });
-            }
-        }
-        group.finish();
+        });
     }};
 }
 
