@@ -49,6 +49,7 @@
 use super::math::{self, Pose, Real, Vector, DIM, FACET_ARITY};
 use super::rapier::dynamics::{
     CoefficientCombineRule, RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType,
+    RigidBodyVelocity,
 };
 use super::rapier::geometry::{
     Aabb, BoundingVolume, BroadPhaseBvh, Collider, ColliderHandle, ColliderSet, InteractionGroups,
@@ -178,6 +179,9 @@ pub(crate) struct Candidate<'a> {
     pub shift: Vector,
     /// Pose at the start of the current substep.
     pub prev_pose: Pose,
+    /// Fractions of the step at the start and at the end of the current substep.
+    pub start: Real,
+    pub end: Real,
 }
 
 impl Candidate<'_> {
@@ -201,6 +205,8 @@ impl Candidate<'_> {
     /// Moves to the end of the next substep (at fraction `s1` of the step).
     pub fn advance(&mut self, s1: Real, dt: Real, motions: &[BodyMotion], bodies: &RigidBodySet) {
         self.prev_pose = self.pose;
+        self.start = self.end;
+        self.end = s1;
         self.update(s1, dt, motions, bodies);
     }
 
@@ -289,15 +295,34 @@ impl Candidate<'_> {
     }
 
     /// Gives the dynamic body (if any) `impulse` at `anchor`: its velocity changes at once.
+    ///
+    /// Over a step the deformables see a dynamic body where its present pose and velocity put
+    /// it, and rapier's step then moves it with its final velocity over the whole step: a
+    /// velocity change `Δv` at the start of a substep, `t` into the step, moves that whole
+    /// predicted path by `Δv·s`, the part before `t` included. That is rapier's own model (one
+    /// velocity per step, so that a resting body is held from the start of the step) and is
+    /// kept for normal impulses. With `keep_path` (friction impulses) the body's start pose is
+    /// moved back by `Δv·t` (and `Δω·t` about its centre of mass) instead, so that where it is
+    /// at `t` stays put: rewriting the path sideways after each friction impulse fed a sway
+    /// that grew by about 0.03 J/s (a 10 kg box on a soft cube never came to rest).
     pub fn apply_impulse(
         &self,
         impulse: Vector,
         anchor: Vector,
         motions: &[BodyMotion],
         bodies: &mut RigidBodySet,
+        keep_path: bool,
+        dt: Real,
     ) {
         if let Some(rb) = self.rigid(motions).and_then(|b| bodies.get_mut(b)) {
+            let (v0, w0) = (rb.linvel(), rb.angvel());
             rb.apply_impulse_at_point(impulse, anchor, true);
+            let elapsed = self.start * dt;
+            if keep_path && elapsed > 0.0 {
+                let change = RigidBodyVelocity::new(rb.linvel() - v0, rb.angvel() - w0);
+                let pose = change.integrate(-elapsed, rb.position(), &rb.local_center_of_mass());
+                rb.set_position(pose, false);
+            }
         }
     }
 }
@@ -370,6 +395,8 @@ pub(crate) fn candidate<'a>(
         pose: pose0,
         shift: Vector::ZERO,
         prev_pose: pose0,
+        start: 0.0,
+        end: 0.0,
     }
 }
 
@@ -625,7 +652,9 @@ impl Contact {
             .sum()
     }
 
-    /// `impulse` on the deformable's side, its opposite on a dynamic body.
+    /// `impulse` on the deformable's side, its opposite on a dynamic body (see
+    /// [`Candidate::apply_impulse`] for `keep_path`).
+    #[allow(clippy::too_many_arguments)]
     fn apply(
         &self,
         impulse: Vector,
@@ -633,11 +662,13 @@ impl Contact {
         cand: &Candidate<'_>,
         motions: &[BodyMotion],
         bodies: &mut RigidBodySet,
+        keep_path: bool,
+        dt: Real,
     ) {
         for a in 0..FACET_ARITY {
             velocities[self.nodes[a] as usize] += impulse * (self.weights[a] * self.inv_masses[a]);
         }
-        cand.apply_impulse(-impulse, self.anchor, motions, bodies);
+        cand.apply_impulse(-impulse, self.anchor, motions, bodies, keep_path, dt);
     }
 
     /// One Gauss–Seidel update: the normal impulse towards the target, then friction.
@@ -665,7 +696,7 @@ impl Contact {
             let total = (self.normal_impulse + (self.target - vn) / k).max(0.0);
             let dj = total - self.normal_impulse;
             self.normal_impulse = total;
-            self.apply(n * dj, velocities, cand, motions, bodies);
+            self.apply(n * dj, velocities, cand, motions, bodies, false, dt);
         }
         if cand.friction <= 0.0 {
             return;
@@ -688,7 +719,33 @@ impl Contact {
         }
         let dj = total - self.friction_impulse;
         self.friction_impulse = total;
-        self.apply(dj, velocities, cand, motions, bodies);
+        self.apply(dj, velocities, cand, motions, bodies, true, dt);
+    }
+}
+
+/// The surface a node meets, in the collider's frame.
+struct NodeHit {
+    /// Fraction of the substep's relative motion at which it is met (0 when touching or
+    /// inside).
+    toi: Real,
+    /// Outward unit normal and the surface point.
+    normal: Vector,
+    local: Vector,
+    /// Distance to the surface at the start of the substep; minus the depth when inside.
+    gap: Real,
+    candidate: usize,
+    inside: bool,
+}
+
+impl NodeHit {
+    /// Inside beats outside (the deepest first); among the others the earliest.
+    fn better_than(&self, other: &NodeHit) -> bool {
+        match (self.inside, other.inside) {
+            (true, true) => self.gap < other.gap,
+            (true, false) => true,
+            (false, true) => false,
+            (false, false) => self.toi < other.toi,
+        }
     }
 }
 
@@ -713,20 +770,26 @@ pub(crate) fn resolve_node(
     bodies: &RigidBodySet,
 ) -> Option<Contact> {
     let start = *x;
-    let motion = v * h;
-    let end = start + motion;
+    let end = start + v * h;
     let seg = Aabb::new(start.min(end), start.max(end)).loosened(1e-6);
-    // (time of impact, outward normal, surface point, candidate, inside)
-    let mut best: Option<(Real, Vector, Vector, usize, bool)> = None;
+    // Everything is measured in each collider's frame, the node taken at the start of the
+    // substep against the collider's pose then (`prev_pose`) and at its predicted end against
+    // the end pose: a node is inside only if it already was at the start, and the segment
+    // between the two is its motion relative to the collider (a body moving into a node hits
+    // it, rather than finding it inside at its end pose and teleporting it out).
+    let mut best: Option<NodeHit> = None;
     for &ci in candidate_ids {
         let ci = ci as usize;
         let cand = &candidates[ci];
         let shape = cand.collider.shape();
-        let pose = &cand.pose;
-        if !shape.compute_aabb(pose).loosened(1e-4).intersects(&seg) {
+        let (p0, p1) = (&cand.prev_pose, &cand.pose);
+        let swept = shape.compute_aabb(p0).merged(&shape.compute_aabb(p1));
+        if !swept.loosened(1e-4).intersects(&seg) {
             continue;
         }
-        if shape.contains_point(pose, start) {
+        let a = p0.inverse_transform_point(start);
+        let b = p1.inverse_transform_point(end);
+        let hit = if shape.contains_local_point(a) {
             // Out by the closest surface point, unless that is the far side of a thin collider
             // the node has crossed the middle of: then back out of the face it came in by (a
             // ray cast back along its motion relative to the collider, no further than it moved
@@ -734,77 +797,87 @@ pub(crate) fn resolve_node(
             // surface.
             // The normal comes from the feature projected on (a face's own normal), not from
             // the tiny, noisy offset of a node a hair inside.
-            let local = pose.inverse_transform_point(start);
-            let (proj, feature) = shape.project_local_point_and_get_feature(local);
-            let offset = proj.point - local;
+            let (proj, feature) = shape.project_local_point_and_get_feature(a);
+            let offset = proj.point - a;
             let depth = offset.length();
+            let feature_normal = shape
+                .feature_normal_at_point(Default::default(), feature, proj.point)
+                .filter(|n| n.is_finite() && n.length_squared() > 0.5);
             if depth <= Real::EPSILON {
                 // On the surface: a touching contact (gap 0), so that the velocity constraint
                 // holds; skipping it let a resting node sink for a substep, be pushed out the
                 // next, and chatter forever.
-                let normal = shape
-                    .feature_normal_at_point(Default::default(), feature, proj.point)
-                    .filter(|n| n.is_finite() && n.length_squared() > 0.5);
-                if let Some(n) = normal {
-                    if best.is_none_or(|b| !b.4 && b.0 > 0.0) {
-                        best = Some((0.0, pose.rotation * n, start, ci, false));
+                feature_normal.map(|n| NodeHit {
+                    toi: 0.0,
+                    normal: n,
+                    local: a,
+                    gap: 0.0,
+                    candidate: ci,
+                    inside: false,
+                })
+            } else {
+                let mut local = proj.point;
+                let mut normal = feature_normal.unwrap_or(offset / depth);
+                let rel = v_before - cand.point_velocity(start, s1, dt, motions, bodies);
+                if rel.length_squared() > 1e-12 {
+                    let back = Ray::new(a, p0.rotation.inverse() * -rel.normalize());
+                    let reach = rel.length() * h + 2.0 * depth + 1e-6;
+                    if let Some(hit) = shape.cast_local_ray_and_get_normal(&back, reach, false) {
+                        // Leaving the shape: the outward normal points along the ray.
+                        let nb = if hit.normal.dot(back.dir) < 0.0 {
+                            -hit.normal
+                        } else {
+                            hit.normal
+                        };
+                        if nb.length_squared() > 0.5 && nb.dot(normal) < 0.0 {
+                            normal = nb;
+                            local = a + nb * nb.dot(back.point_at(hit.time_of_impact) - a);
+                        }
                     }
                 }
-                continue;
+                Some(NodeHit {
+                    toi: 0.0,
+                    normal,
+                    local,
+                    gap: -(local - a).length(),
+                    candidate: ci,
+                    inside: true,
+                })
             }
-            let mut point = pose.transform_point(proj.point);
-            let mut normal = shape
-                .feature_normal_at_point(Default::default(), feature, proj.point)
-                .filter(|n| n.is_finite() && n.length_squared() > 0.5)
-                .map_or_else(|| pose.rotation * (offset / depth), |n| pose.rotation * n);
-            let rel = v_before - cand.point_velocity(start, s1, dt, motions, bodies);
-            if rel.length_squared() > 1e-12 {
-                let back = Ray::new(start, -rel.normalize());
-                let reach = rel.length() * h + 2.0 * depth + 1e-6;
-                if let Some(hit) = shape.cast_ray_and_get_normal(pose, &back, reach, false) {
-                    // Leaving the shape: the outward normal points along the ray.
-                    let nb = if hit.normal.dot(back.dir) < 0.0 {
-                        -hit.normal
-                    } else {
-                        hit.normal
-                    };
-                    if nb.length_squared() > 0.5 && nb.dot(normal) < 0.0 {
-                        normal = nb;
-                        point = start + nb * nb.dot(back.point_at(hit.time_of_impact) - start);
+        } else if a != b {
+            let ray = Ray::new(a, b - a);
+            shape
+                .cast_local_ray_and_get_normal(&ray, 1.0, true)
+                .map(|hit| {
+                    let local = ray.point_at(hit.time_of_impact);
+                    NodeHit {
+                        toi: hit.time_of_impact,
+                        normal: hit.normal,
+                        local,
+                        gap: (a - local).dot(hit.normal).max(0.0),
+                        candidate: ci,
+                        inside: false,
                     }
-                }
-            }
-            let depth = (point - start).length();
-            if best.is_none_or(|b| !b.4 || depth > (b.2 - start).length()) {
-                best = Some((0.0, normal, point, ci, true));
-            }
-        } else if motion.length_squared() > 0.0 {
-            let ray = Ray::new(start, motion);
-            if let Some(hit) = shape.cast_ray_and_get_normal(pose, &ray, 1.0, true) {
-                if best.is_none_or(|b| !b.4 && hit.time_of_impact < b.0) {
-                    best = Some((
-                        hit.time_of_impact,
-                        hit.normal,
-                        ray.point_at(hit.time_of_impact),
-                        ci,
-                        false,
-                    ));
-                }
+                })
+        } else {
+            None
+        };
+        if let Some(hit) = hit {
+            if best.as_ref().is_none_or(|b| hit.better_than(b)) {
+                best = Some(hit);
             }
         }
     }
-    let (_, n, point, ci, inside) = best?;
+    let hit = best?;
+    let ci = hit.candidate;
     let cand = &candidates[ci];
+    let n = cand.pose.rotation * hit.normal;
+    let point = cand.pose.transform_point(hit.local);
     let vc = cand.point_velocity(point, s1, dt, motions, bodies);
     let vn = (v - vc).dot(n);
-    let gap = if inside {
-        0.0
-    } else {
-        (start - point).dot(n).max(0.0)
-    };
-    let vn_min = -gap / h;
-    if inside {
-        *x = point;
+    let vn_min = -hit.gap.max(0.0) / h;
+    if hit.inside {
+        *x = cand.prev_pose.transform_point(hit.local);
     }
     let approach = (v_before - vc).dot(n);
     let mut target = if -approach > restitution_threshold && cand.restitution > 0.0 {
@@ -927,8 +1000,8 @@ pub(crate) fn resolve_facet(
     let denom_of = |w: &[Real; FACET_ARITY]| -> Real {
         w.iter().zip(inv_masses).map(|(w, im)| w * w * im).sum()
     };
-    // (depth, candidate, point, weights, direction)
-    let mut best: Option<(Real, usize, Vector, [Real; FACET_ARITY], Vector)> = None;
+    // (depth, candidate, point, weights, direction, separation at the start)
+    let mut best: Option<(Real, usize, Vector, [Real; FACET_ARITY], Vector, Real)> = None;
     for &ci in candidate_ids {
         let cand = &candidates[ci as usize];
         for f in &cand.features {
@@ -951,13 +1024,18 @@ pub(crate) fn resolve_facet(
                 continue;
             }
             if best.is_none_or(|b| d < b.0) {
-                best = Some((d, ci as usize, c - u * f.radius, w, u));
+                best = Some((d, ci as usize, c - u * f.radius, w, u, d0));
             }
         }
     }
-    let (d, ci, point, weights, u) = best?;
+    let (d, ci, point, weights, u, d0) = best?;
     // The facet point's normal velocity relative to the feature must change by −d/h (d < 0) for
-    // them to meet at the end of the substep.
+    // them to meet at the end of the substep; a feature that was already a hair inside at the
+    // start (within the tolerance) is not pushed out within this one substep (at h of a
+    // fraction of a millisecond even a tenth of a millimetre becomes a separating velocity of
+    // metres per second, energy from nowhere that made a resting box bounce), but over a step.
+    let already = d0.min(0.0);
+    let d = d - already * (1.0 - (h / dt).min(1.0));
     let v_facet: Vector = (0..FACET_ARITY)
         .map(|a| (y[a] - x[a]) * (weights[a] / h))
         .sum();

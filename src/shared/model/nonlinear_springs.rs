@@ -11,7 +11,7 @@
 //! `U(L) = k [ (L² − L0²)/2 − L0² ln(L/L0) ]`.
 //!
 //! Material mapping: as [`super::springs`] but with half the constant
-//! ([`MATERIAL_SCALE`]` = 2.9`), because the spring is `2k` stiff at rest.
+//! ([`MATERIAL_SCALE`]` ≈ 2.21` in 3D, `1.25` in 2D), because the spring is `2k` stiff at rest.
 //!
 //! The force is kept finite at `L → 0` by evaluating the law at `max(L, 10⁻⁶ L0)`.
 
