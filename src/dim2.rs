@@ -71,6 +71,13 @@ pub mod math {
         [1.0 - t, t]
     }
 
+    /// The sum of the two singular values of `a`, `√(|a|²_F + 2|det a|)`: how fast the
+    /// rotation of `a`'s polar decomposition can turn as `a` changes (`|δθ| ≤ |δa| / (σ₁ + σ₂)`).
+    pub fn least_singular_pair_sum(a: Matrix) -> Real {
+        let frob = a.x_axis.length_squared() + a.y_axis.length_squared();
+        (frob + 2.0 * a.determinant().abs()).sqrt()
+    }
+
     /// Outer product `a bᵀ`.
     #[inline]
     pub fn outer(a: Vector, b: Vector) -> Matrix {

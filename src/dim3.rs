@@ -116,6 +116,19 @@ pub mod math {
         inertia.inverse() * momentum
     }
 
+    /// The smallest sum of two singular values of `a` (`σ₂ + σ₃`): how fast the rotation of
+    /// `a`'s polar decomposition can turn as `a` changes (`|δR| ≤ |δa| / (σ₂ + σ₃)`).
+    pub fn least_singular_pair_sum(a: Matrix) -> Real {
+        let ev = rapier3d::glamx::SymmetricEigen3::eigenvalues(a.transpose() * a);
+        let s = ev.max(Vector::ZERO).map(Real::sqrt);
+        let sum = s.x + s.y + s.z;
+        if sum.is_finite() {
+            sum - s.max_element()
+        } else {
+            0.0
+        }
+    }
+
     /// The rotation of the polar decomposition of `a = Σ r_i R0_iᵀ` (the rotation that best
     /// maps the rest offsets onto the current ones, Müller et al. 2005). Computed in `f64` by
     /// the scaled Newton iteration `X ← ½(γX + X⁻ᵀ/γ)`, which converges quadratically for

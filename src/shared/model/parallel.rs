@@ -65,7 +65,8 @@ pub(crate) struct Split {
     force: Vec<Vector>,
     /// The stiffness row bound of entries `stiffness_from..`, for the terms whose bound
     /// changes with the state: nonlinear springs (`stiffness_from = 0`), the repulsions of the
-    /// edge-repulsion element (the cell slots); empty for the other models.
+    /// edge-repulsion element and the shape-matching cells' turning (the cell slots); empty
+    /// for the other models.
     stiffness: Vec<Real>,
     stiffness_from: usize,
 }
@@ -93,7 +94,7 @@ impl Split {
         });
         let stiffness_from = match elements {
             Elements::NonlinearSprings(_) => 0,
-            Elements::EdgeRepulsion(_) => spring_entries,
+            Elements::EdgeRepulsion(_) | Elements::ShapeMatching(_) => spring_entries,
             _ => entries,
         };
         Split {
@@ -135,7 +136,7 @@ impl Split {
                 s.evaluate_cells(x, v, slot_force, stiffness)
             }
             Elements::ShapeMatching(s) => {
-                s.evaluate_cells(x, v, slot_force);
+                s.evaluate_cells(x, v, slot_force, stiffness);
                 Real::INFINITY
             }
         };

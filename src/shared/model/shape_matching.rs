@@ -85,7 +85,13 @@ pub fn residual_torque(rest: &[Vector], current: &[Vector], q: Rotation, k: Real
 
 /// Forces of one shape-based element with `N` vertices at `x` moving with `v`, rest offsets
 /// `rest` (from the rest centroid), stiffness `k` and damping `c` per vertex. Returns the force
-/// on each vertex and the fitted rotation.
+/// on each vertex, the fitted rotation, and the smallest sum of two singular values of
+/// `A = Σ r_i R0_iᵀ` (see [`ShapeMatching::turning_stiffness`]).
+///
+/// Offsets are taken from the first vertex before the centroid is subtracted: in `f32` the
+/// centroid of coordinates far from the origin, `Σx · (1/n)`, is off by an ulp of `x`, and that
+/// error times `k` was a net force on the cell that grew with Young's modulus (a stiff 2D
+/// beam stretched 1.3 mm with gravity off).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn element_forces<const N: usize>(
@@ -97,13 +103,19 @@ pub fn element_forces<const N: usize>(
     fit: RotationFit,
     damping: ShapeDamping,
     warm: Rotation,
-) -> ([Vector; N], Rotation) {
+) -> ([Vector; N], Rotation, Real) {
     let inv_n = 1.0 / N as Real;
-    let xc = x.iter().copied().sum::<Vector>() * inv_n;
+    let x0 = x[0];
+    let xc = x.iter().map(|xa| *xa - x0).sum::<Vector>() * inv_n;
     let vc = v.iter().copied().sum::<Vector>() * inv_n;
-    let r = x.map(|xa| xa - xc);
+    let r = x.map(|xa| (xa - x0) - xc);
     let dv = v.map(|va| va - vc);
     let q = fit_rotation(rest, &r, fit, warm);
+    let mut a = math::outer(Vector::ZERO, Vector::ZERO);
+    for (r, r0) in r.iter().zip(rest) {
+        a += math::outer(*r, *r0);
+    }
+    let pair = math::least_singular_pair_sum(a);
     let w = match damping {
         ShapeDamping::RigidMotion if c > 0.0 => math::rigid_angular_velocity(&r, &dv),
         _ => math::ANG_ZERO,
@@ -114,7 +126,7 @@ pub fn element_forces<const N: usize>(
         let ve = dv[a] - math::ang_cross(w, r[a]);
         out[a] = (goal - r[a]) * k - ve * c;
     }
-    (out, q)
+    (out, q, pair)
 }
 
 /// Shape-based elements on any cells.
@@ -126,6 +138,9 @@ pub(crate) struct ShapeMatching {
     rest: Vec<Vector>,
     k: Vec<Real>,
     c: Vec<Real>,
+    /// Per cell: `Σ_b |R0_b|`, and the smallest singular pair sum of `Σ R0 R0ᵀ` at rest.
+    rest_sum: Vec<Real>,
+    rest_pair: Vec<Real>,
     rotations: Vec<Rotation>,
     fit: RotationFit,
     damping: ShapeDamping,
@@ -148,18 +163,28 @@ impl ShapeMatching {
             rest: Vec::with_capacity(mesh.cell_indices().len()),
             k: Vec::new(),
             c: Vec::new(),
+            rest_sum: Vec::new(),
+            rest_pair: Vec::new(),
             rotations: vec![initial; mesh.num_cells()],
             fit,
             damping,
         };
         for (cell, ids) in mesh.cells().enumerate() {
-            let centroid = ids.iter().map(|&i| nodes[i as usize]).sum::<Vector>() / arity as Real;
+            let o = nodes[ids[0] as usize];
+            let centroid =
+                ids.iter().map(|&i| nodes[i as usize] - o).sum::<Vector>() / arity as Real;
             let mut spread = 0.0;
+            let mut sum = 0.0;
+            let mut a = math::outer(Vector::ZERO, Vector::ZERO);
             for &i in ids {
-                let r0 = nodes[i as usize] - centroid;
+                let r0 = (nodes[i as usize] - o) - centroid;
                 spread += r0.length_squared();
+                sum += r0.length();
+                a += math::outer(r0, r0);
                 out.rest.push(r0);
             }
+            out.rest_sum.push(sum);
+            out.rest_pair.push(math::least_singular_pair_sum(a));
             let v = mesh.rest_volumes()[cell];
             let material_k = MATERIAL_SCALE * params.material.young_modulus * v / spread;
             let (k, c) = params.k_c(material_k, params.material.density * v / arity as Real);
@@ -169,8 +194,9 @@ impl ShapeMatching {
         out
     }
 
-    /// Adds the cells' bounds, which do not change with the state: the row bound of
-    /// `k (𝟙 − 𝟏𝟏ᵀ/n)` is `2k(1 − 1/n) ≤ 2k`; the rest of `2k` covers the rotation's variation.
+    /// Adds the cells' bounds that do not change with the state: the row bound of
+    /// `k (𝟙 − 𝟏𝟏ᵀ/n)`, `2k(1 − 1/n) ≤ 2k`. The fitted rotation's dependence on the nodes adds
+    /// a part that does change ([`ShapeMatching::turning_stiffness`]).
     pub fn constant_bounds(&self, bounds: &mut NodeBounds) {
         for (cell, ids) in self.cells.chunks_exact(self.arity).enumerate() {
             for &i in ids {
@@ -178,6 +204,25 @@ impl ShapeMatching {
                 bounds.damping[i as usize] += 2.0 * self.c[cell];
             }
         }
+    }
+
+    /// The stiffness row bound that the fitted rotation adds to vertex `a` of `cell`, given the
+    /// smallest singular pair sum `pair` of the cell's `A = Σ r_b R0_bᵀ` now.
+    ///
+    /// The goal `R R0_a` turns with `R`, and `|δR| ≤ |δA| / pair ≤ Σ_b |δx_b| |R0_b| / pair`
+    /// (the polar decomposition's rotation turns at `1/(σᵢ + σⱼ)`), so the row of vertex `a`
+    /// gains `k |R0_a| Σ_b |R0_b| / pair`: about `k` for a cell at rest, growing as a cell is
+    /// flattened (without it the substep came from `2k` alone and the manipulator's strikes
+    /// blew shape matching up, in 2D and 3D). `pair` is taken no smaller than a twentieth of its
+    /// rest value: a cell crushed flat would otherwise stop the body's clock.
+    #[inline]
+    fn turning_stiffness(&self, cell: usize, pair: Real) -> Real {
+        turning(
+            self.k[cell],
+            self.rest_sum[cell],
+            self.rest_pair[cell],
+            pair,
+        )
     }
 
     /// Adds the cells' forces into `acc` and advances each cell's warm-start rotation.
@@ -190,27 +235,37 @@ impl ShapeMatching {
 
     fn accumulate_n<const N: usize>(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
         let n = x.len();
-        let (v, force) = (&v[..n], &mut acc.force[..n]);
+        let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
         let (fit, damping) = (self.fit, self.damping);
         let (cells, _) = self.cells.as_chunks::<N>();
         let (rest, _) = self.rest.as_chunks::<N>();
-        let terms = cells.iter().zip(rest).zip(&self.k).zip(&self.c);
-        for ((((ids, rest), &k), &c), q) in terms.zip(&mut self.rotations) {
-            let f;
-            (f, *q) = cell_forces(ids, rest, k, c, fit, damping, *q, x, v);
+        for (cell, (ids, rest)) in cells.iter().zip(rest).enumerate() {
+            let (k, c, q) = (self.k[cell], self.c[cell], self.rotations[cell]);
+            let (f, q, pair) = cell_forces(ids, rest, k, c, fit, damping, q, x, v);
+            self.rotations[cell] = q;
+            let turning = self.turning_stiffness(cell, pair);
             for a in 0..N {
-                force[ids[a] as usize] += f[a];
+                let i = ids[a] as usize;
+                force[i] += f[a];
+                stiffness[i] += turning * rest[a].length();
             }
         }
     }
 
-    /// Writes each cell's force on each of its vertices into `force` (one entry per slot) and
-    /// advances the cells' rotations, on rayon's threads.
+    /// Writes each cell's force on each of its vertices into `force` and its turning
+    /// stiffness into `stiffness` (one entry per slot) and advances the cells' rotations, on
+    /// rayon's threads.
     #[cfg(feature = "parallel")]
-    pub fn evaluate_cells(&mut self, x: &[Vector], v: &[Vector], force: &mut [Vector]) {
+    pub fn evaluate_cells(
+        &mut self,
+        x: &[Vector],
+        v: &[Vector],
+        force: &mut [Vector],
+        stiffness: &mut [Real],
+    ) {
         match self.kind {
-            CellKind::Simplex => self.evaluate_cells_n::<SIMPLEX_ARITY>(x, v, force),
-            CellKind::Cube => self.evaluate_cells_n::<CUBE_ARITY>(x, v, force),
+            CellKind::Simplex => self.evaluate_cells_n::<SIMPLEX_ARITY>(x, v, force, stiffness),
+            CellKind::Cube => self.evaluate_cells_n::<CUBE_ARITY>(x, v, force, stiffness),
         }
     }
 
@@ -220,6 +275,7 @@ impl ShapeMatching {
         x: &[Vector],
         v: &[Vector],
         force: &mut [Vector],
+        stiffness: &mut [Real],
     ) {
         use super::parallel::CELLS_PER_TASK as CHUNK;
         use rayon::prelude::*;
@@ -228,16 +284,26 @@ impl ShapeMatching {
         let (cells, _) = self.cells.as_chunks::<N>();
         let (rest, _) = self.rest.as_chunks::<N>();
         let (k, c) = (&self.k, &self.c);
+        let (rest_sum, rest_pair) = (&self.rest_sum, &self.rest_pair);
         let (out, _) = force.as_chunks_mut::<N>();
+        let (out_k, _) = stiffness.as_chunks_mut::<N>();
         out.par_chunks_mut(CHUNK)
+            .zip(out_k.par_chunks_mut(CHUNK))
             .zip(self.rotations.par_chunks_mut(CHUNK))
             .enumerate()
-            .for_each(|(t, (out, rotations))| {
+            .for_each(|(t, ((out, out_k), rotations))| {
                 let first = t * CHUNK;
-                let terms = cells[first..].iter().zip(&rest[first..]);
-                let terms = terms.zip(&k[first..]).zip(&c[first..]);
-                for ((f, q), (((ids, rest), &k), &c)) in out.iter_mut().zip(rotations).zip(terms) {
-                    (*f, *q) = cell_forces(ids, rest, k, c, fit, damping, *q, x, v);
+                let slots = out.iter_mut().zip(out_k).zip(rotations);
+                for (j, ((f, fk), q)) in slots.enumerate() {
+                    let cell = first + j;
+                    let (ids, rest) = (&cells[cell], &rest[cell]);
+                    let pair;
+                    (*f, *q, pair) =
+                        cell_forces(ids, rest, k[cell], c[cell], fit, damping, *q, x, v);
+                    let turning = turning(k[cell], rest_sum[cell], rest_pair[cell], pair);
+                    for a in 0..N {
+                        fk[a] = turning * rest[a].length();
+                    }
                 }
             });
     }
@@ -246,15 +312,27 @@ impl ShapeMatching {
         let n = self.arity;
         let mut e = 0.0;
         for (cell, ids) in self.cells.chunks_exact(n).enumerate() {
-            let xc = ids.iter().map(|&i| x[i as usize]).sum::<Vector>() / n as Real;
+            let o = x[ids[0] as usize];
+            let xc = ids.iter().map(|&i| x[i as usize] - o).sum::<Vector>() / n as Real;
             let q = self.rotations[cell];
             for (a, &i) in ids.iter().enumerate() {
                 let goal = q * self.rest[cell * n + a];
-                e += 0.5 * self.k[cell] * (x[i as usize] - xc - goal).length_squared();
+                e += 0.5 * self.k[cell] * ((x[i as usize] - o) - xc - goal).length_squared();
             }
         }
         e
     }
+}
+
+/// Smallest singular pair sum a cell's turning stiffness is computed with, as a fraction of
+/// its rest value (see [`ShapeMatching::turning_stiffness`]).
+const TURNING_FLOOR: Real = 0.05;
+
+/// `k Σ_b |R0_b| / max(pair, TURNING_FLOOR · rest_pair)`: the turning stiffness per unit of
+/// `|R0_a|`.
+#[inline]
+fn turning(k: Real, rest_sum: Real, rest_pair: Real, pair: Real) -> Real {
+    k * rest_sum / pair.max(TURNING_FLOOR * rest_pair)
 }
 
 /// [`element_forces`] of the cell with vertices `ids`.
@@ -270,7 +348,7 @@ fn cell_forces<const N: usize>(
     warm: Rotation,
     x: &[Vector],
     v: &[Vector],
-) -> ([Vector; N], Rotation) {
+) -> ([Vector; N], Rotation, Real) {
     let xs = ids.map(|i| x[i as usize]);
     let vs = ids.map(|i| v[i as usize]);
     element_forces(rest, &xs, &vs, k, c, fit, damping, warm)
