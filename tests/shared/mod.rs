@@ -6,6 +6,7 @@ mod contact;
 mod elements;
 mod errors;
 mod fall;
+mod io;
 mod mesh;
 mod metrics;
 mod parallel;

@@ -8,6 +8,7 @@
 //! that contact and rendering use.
 
 pub mod cube;
+pub mod io;
 mod lattice;
 
 use std::collections::HashMap;
