@@ -12,5 +12,6 @@ mod metrics;
 mod parallel;
 mod pipeline;
 mod scenes;
+mod shapes;
 mod sleep;
 mod support;

@@ -10,6 +10,7 @@
 pub mod cube;
 pub mod io;
 mod lattice;
+mod voxel;
 
 use std::collections::HashMap;
 
