@@ -13,3 +13,6 @@ mod shared;
 
 #[path = "only2d/cooper.rs"]
 mod cooper;
+
+#[path = "only2d/polygon.rs"]
+mod polygon;
