@@ -207,3 +207,35 @@ fn voxelised_2d_trimesh_area() {
     );
     assert_eq!(mesh.num_cells(), 2 * 400);
 }
+
+/// A 2D read takes meshes in the x-y plane: a point with z ≠ 0 is an error at its line,
+/// in every format that writes z.
+#[test]
+fn reading_2d_requires_z_zero() {
+    use sinew::dim2::mesh::io::gmsh::{self, GmshVersion};
+    use sinew::dim2::mesh::io::{vtk, ReadError};
+    let mesh = Mesh::cuboid(Vector::splat(0.5), [2, 2], CellKind::Simplex).unwrap();
+    let text = vtk::to_string(&mesh);
+    // Line 6 is the first point.
+    let bad: Vec<String> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 5 {
+                l.replace(" 0", " 0.25")
+            } else {
+                l.to_owned()
+            }
+        })
+        .collect();
+    let e = vtk::read_str(&bad.join("\n")).unwrap_err();
+    assert!(
+        matches!(e, ReadError::OutOfPlane { z, .. } if z == 0.25),
+        "{e}"
+    );
+    assert!(e.to_string().contains("line 6"), "{e}");
+    let text = gmsh::to_string(&mesh, GmshVersion::V2_2);
+    let e = gmsh::read_str(&text.replacen("1 -0.5 -0.5 0", "1 -0.5 -0.5 1", 1)).unwrap_err();
+    assert!(matches!(e, ReadError::OutOfPlane { .. }), "{e}");
+    assert!(e.to_string().contains("line 6"), "{e}");
+}

@@ -389,7 +389,8 @@ fn read_cells(c: &mut Cursor<'_>) -> Result<Cells, ReadError> {
             return Err(ReadError::Count {
                 at: c.at(),
                 what: format!(
-                    "the cells hold more than the {size} values the CELLS header ({header}) declares"
+                    "the cells hold more than the {size} values the CELLS header (line {}) declares",
+                    header.line.unwrap_or(1)
                 ),
             });
         }
