@@ -38,9 +38,9 @@ impl Mesh {
     /// use sinew::dim3::{CellKind, Mesh};
     /// use sinew::dim3::rapier::parry::shape::Ball;
     ///
-    /// let mesh = Mesh::from_shape(&Ball::new(0.5), 0.1, CellKind::Simplex).unwrap();
+    /// let mesh = Mesh::from_shape(&Ball::new(0.5), 0.05, CellKind::Simplex).unwrap();
     /// let exact = 4.0 / 3.0 * std::f32::consts::PI * 0.125;
-    /// assert!((mesh.total_volume() - exact).abs() < 0.05 * exact);
+    /// assert!((mesh.total_volume() - exact).abs() < 0.02 * exact);
     /// ```
     pub fn from_shape(
         shape: &dyn Shape,

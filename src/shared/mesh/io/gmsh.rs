@@ -310,8 +310,8 @@ fn nodes_v4(c: &mut Cursor<'_>, raw: &mut Raw) -> Result<HashMap<u64, u32>, Read
                     at: c.at(),
                     what: format!(
                         "{} values on a coordinate line, expected {}",
-                        3 + extra,
-                        3 + allowed
+                        extra.saturating_add(3),
+                        allowed.saturating_add(3)
                     ),
                 });
             }

@@ -493,7 +493,11 @@ impl Raw {
         let Some(kind) = self.kind else {
             return Err(ReadError::NoCells {
                 at: self.at(Some(self.end_line)),
-                cells: plural(CellKind::Simplex),
+                cells: if DIM == 2 {
+                    "triangles or quads"
+                } else {
+                    "tetrahedra or hexahedra"
+                },
                 dim: DIM_NAME,
             });
         };

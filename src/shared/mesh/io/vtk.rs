@@ -385,7 +385,7 @@ fn read_cells(c: &mut Cursor<'_>) -> Result<Cells, ReadError> {
         let k = c.count(t, "a cell's node count (non-negative integer)")?;
         let line = c.at().line.unwrap_or(1);
         let start = cells.connectivity.len();
-        if start.saturating_add(k + 1).saturating_add(i) > size {
+        if start.saturating_add(k).saturating_add(1).saturating_add(i) > size {
             return Err(ReadError::Count {
                 at: c.at(),
                 what: format!(
