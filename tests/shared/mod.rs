@@ -7,6 +7,7 @@ mod elements;
 mod errors;
 mod fall;
 mod io;
+mod io_props;
 mod mesh;
 mod metrics;
 mod parallel;
