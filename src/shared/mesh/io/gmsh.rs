@@ -17,7 +17,7 @@
 //!   way) and unused nodes dropped: see [the module](super).
 //!
 //! # Writing
-//! [`write`] produces 4.1 (one entity of the mesh's dimension holding every node and cell)
+//! [`write()`] produces 4.1 (one entity of the mesh's dimension holding every node and cell)
 //! or 2.2, node tags `1..n` in mesh order, reals written so that they read back exactly.
 //!
 //! ```
@@ -390,7 +390,7 @@ fn cell_nodes(
     raw.set_kind(kind, c.at())?;
     let arity = kind.arity();
     for k in 0..arity {
-        let t = c.field(&format!("node {} of {arity} of the {}", k + 1, kind.name()))?;
+        let t = c.field_with(|| format!("node {} of {arity} of the {}", k + 1, kind.name()))?;
         let tag = c.uint(t, "a node tag (non-negative integer)")?;
         let Some(&i) = tags.get(&tag) else {
             return Err(ReadError::Index {
@@ -401,7 +401,7 @@ fn cell_nodes(
         };
         raw.cells.push(i);
     }
-    c.end_of_line(&format!("the {arity} nodes of a {}", kind.name()))?;
+    c.end_of_line_with(|| format!("the {arity} nodes of a {}", kind.name()))?;
     raw.cell_lines.push(c.at().line.unwrap_or(1));
     Ok(())
 }
@@ -586,7 +586,7 @@ pub fn write(mesh: &Mesh, version: GmshVersion, mut out: impl Write) -> std::io:
     Ok(())
 }
 
-/// [`write`] into a string.
+/// [`write()`] into a string.
 pub fn to_string(mesh: &Mesh, version: GmshVersion) -> String {
     let mut out = Vec::new();
     // Writing into a Vec cannot fail, and the text is ASCII.

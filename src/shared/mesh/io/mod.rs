@@ -316,7 +316,9 @@ impl<'a> Cursor<'a> {
     /// Moves to the next record line of a section that declared `declared` records: a line
     /// starting with `$` (the section's end) means the count was wrong.
     fn record_line(&mut self, what: &str, index: usize, declared: usize) -> Result<(), ReadError> {
-        self.line(&format!("{what} {} of {declared}", index + 1))?;
+        if !self.next_line() {
+            return Err(self.truncated(&format!("{what} {} of {declared}", index + 1)));
+        }
         if let Some(&t) = self.tokens.peek() {
             if t.starts_with('$') {
                 return Err(ReadError::Count {
@@ -340,29 +342,49 @@ impl<'a> Cursor<'a> {
 
     /// The next token on the current line, or a [`ReadError::Count`] error if it ended.
     fn field(&mut self, expected: &str) -> Result<&'a str, ReadError> {
-        self.tokens.next().ok_or_else(|| ReadError::Count {
-            at: self.at(),
-            what: format!("the line ends before {expected}"),
-        })
+        self.field_with(|| expected.to_owned())
+    }
+
+    /// [`Cursor::field`], the message built only on failure (hot loops).
+    fn field_with(&mut self, expected: impl FnOnce() -> String) -> Result<&'a str, ReadError> {
+        match self.tokens.next() {
+            Some(t) => Ok(t),
+            None => Err(ReadError::Count {
+                at: self.at(),
+                what: format!("the line ends before {}", expected()),
+            }),
+        }
     }
 
     /// The next token, on this line or the next ones.
     fn token(&mut self, expected: &str) -> Result<&'a str, ReadError> {
+        self.token_with(|| expected.to_owned())
+    }
+
+    /// [`Cursor::token`], the message built only on failure (hot loops).
+    fn token_with(&mut self, expected: impl FnOnce() -> String) -> Result<&'a str, ReadError> {
         loop {
             if let Some(t) = self.tokens.next() {
                 return Ok(t);
             }
-            self.line(expected)?;
+            if !self.next_line() {
+                return Err(self.truncated(&expected()));
+            }
         }
     }
 
     /// Fails if the current line holds more tokens.
     fn end_of_line(&mut self, what: &str) -> Result<(), ReadError> {
+        self.end_of_line_with(|| what.to_owned())
+    }
+
+    /// [`Cursor::end_of_line`], the message built only on failure (hot loops).
+    fn end_of_line_with(&mut self, what: impl FnOnce() -> String) -> Result<(), ReadError> {
         match self.tokens.next() {
             None => Ok(()),
             Some(t) => Err(ReadError::Count {
                 at: self.at(),
-                what: format!("unexpected `{}` after {what}", shorten(t)),
+                what: format!("unexpected `{}` after {}", shorten(t), what()),
             }),
         }
     }

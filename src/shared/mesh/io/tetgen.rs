@@ -16,7 +16,7 @@
 //!   module](super).
 //!
 //! # Writing
-//! [`write`] numbers points and cells from 1, no attributes, no markers. Box meshes cannot be
+//! [`write()`] numbers points and cells from 1, no attributes, no markers. Box meshes cannot be
 //! written (the format holds simplices only).
 
 use std::io::{BufRead, Write};
@@ -82,7 +82,7 @@ fn parse(node: &str, node_file: &str, ele: &str, ele_file: &str) -> Result<Mesh,
         let t = c.field("the cell number")?;
         c.uint(t, "a cell number (non-negative integer)")?;
         for k in 0..per_cell {
-            let t = c.field(&format!("node {} of {per_cell}", k + 1))?;
+            let t = c.field_with(|| format!("node {} of {per_cell}", k + 1))?;
             let index = c.uint(t, "a node number (non-negative integer)")?;
             let local = index.checked_sub(base).filter(|&l| l < n as u64);
             let Some(local) = local else {
@@ -100,7 +100,7 @@ fn parse(node: &str, node_file: &str, ele: &str, ele_file: &str) -> Result<Mesh,
             }
         }
         for k in 0..attributes {
-            let t = c.field(&format!("attribute {} of {attributes}", k + 1))?;
+            let t = c.field_with(|| format!("attribute {} of {attributes}", k + 1))?;
             c.real(t)?;
         }
         c.end_of_line("the cell's nodes and attributes")?;
@@ -200,11 +200,11 @@ fn parse_node(
         }
         let mut xyz = [0.0; 3];
         for v in xyz.iter_mut().take(DIM) {
-            let t = c.field(&format!("{DIM} coordinates"))?;
+            let t = c.field_with(|| format!("{DIM} coordinates"))?;
             *v = c.real(t)?;
         }
         for k in 0..attributes {
-            let t = c.field(&format!("attribute {} of {attributes}", k + 1))?;
+            let t = c.field_with(|| format!("attribute {} of {attributes}", k + 1))?;
             c.real(t)?;
         }
         if markers == 1 {
@@ -260,7 +260,7 @@ pub fn write(mesh: &Mesh, mut node: impl Write, mut ele: impl Write) -> std::io:
     Ok(())
 }
 
-/// [`write`] into two strings (`.node`, `.ele`); `None` for a box mesh.
+/// [`write()`] into two strings (`.node`, `.ele`); `None` for a box mesh.
 pub fn to_strings(mesh: &Mesh) -> Option<(String, String)> {
     let mut node = Vec::new();
     let mut ele = Vec::new();

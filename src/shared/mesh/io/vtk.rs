@@ -19,7 +19,7 @@
 //!   module](super).
 //!
 //! # Writing
-//! [`write`] produces version 3.0 (classic `CELLS`), points as `float` written so that they
+//! [`write()`] produces version 3.0 (classic `CELLS`), points as `float` written so that they
 //! read back exactly (z = 0 in 2D).
 
 use std::io::{BufRead, Write};
@@ -292,7 +292,7 @@ fn points(c: &mut Cursor<'_>, raw: &mut Raw) -> Result<(), ReadError> {
     for i in 0..n {
         let mut p: [Real; 3] = [0.0; 3];
         for v in &mut p {
-            let t = c.token(&format!("the coordinates of point {} of {n}", i + 1))?;
+            let t = c.token_with(|| format!("the coordinates of point {} of {n}", i + 1))?;
             *v = c.real(t).map_err(|e| point_count_hint(e, i, n))?;
         }
         raw.nodes.push(c.point(p)?);
@@ -380,7 +380,7 @@ fn read_cells(c: &mut Cursor<'_>) -> Result<Cells, ReadError> {
     for i in 0..n {
         let t = match pending.take() {
             Some(t) => t,
-            None => c.token(&format!("cell {} of {n}", i + 1))?,
+            None => c.token_with(|| format!("cell {} of {n}", i + 1))?,
         };
         let k = c.count(t, "a cell's node count (non-negative integer)")?;
         let line = c.at().line.unwrap_or(1);
@@ -473,7 +473,7 @@ pub fn write(mesh: &Mesh, mut out: impl Write) -> std::io::Result<()> {
     Ok(())
 }
 
-/// [`write`] into a string.
+/// [`write()`] into a string.
 pub fn to_string(mesh: &Mesh) -> String {
     let mut out = Vec::new();
     // Writing into a Vec cannot fail, and the text is ASCII.
