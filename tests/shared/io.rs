@@ -356,6 +356,7 @@ fn gmsh_truncated_file() {
         matches!(e, ReadError::Truncated { ref expected, .. } if expected.contains("$Elements")),
         "{e}"
     );
+    names_line(&e, line_of(&text, "$EndNodes"));
     // An unclosed section.
     let e =
         gmsh::read_str("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 0 0\n").unwrap_err();
@@ -571,6 +572,7 @@ fn tetgen_bad_input() {
     )
     .unwrap_err();
     assert!(matches!(e, ReadError::Truncated { .. }), "{e}");
+    names_line(&e, n + 2);
     let e = tetgen::read_str(
         &replace_line(&node, 2, &format!("{} {DIM} 0 0", n - 1)),
         &ele,
@@ -638,6 +640,8 @@ fn vtk_bad_input() {
     ))
     .unwrap_err();
     assert!(matches!(e, ReadError::Count { .. }), "{e}");
+    // Found at the second cell, the first that does not fit.
+    names_line(&e, cells + 2);
     // CELL_TYPES count disagrees with CELLS.
     let e = vtk::read_str(&replace_line(
         &text,
