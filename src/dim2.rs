@@ -384,6 +384,8 @@ pub(crate) mod render {
     }
 }
 
+pub mod polygon;
 #[path = "shared/mod.rs"]
 mod shared;
+pub use polygon::PolygonError;
 pub use shared::*;

@@ -9,7 +9,9 @@
 //! Each dimension has the same API:
 //!
 //! * [`dim3::Mesh`] — rest topology, validation and boundary extraction, with lattice
-//!   generators ([`dim3::Mesh::cuboid`]).
+//!   generators ([`dim3::Mesh::cuboid`], [`dim3::Mesh::from_shape`] for any parry shape),
+//!   2D polygons triangulated ([`dim2::Mesh::polygon`]), and mesh files: Gmsh, TetGen /
+//!   Triangle and legacy VTK readers and writers ([`dim3::mesh::io`]).
 //! * [`dim3::ElementModel`] — the five element force laws: damped springs, springs to the
 //!   centroid, nonlinear springs (Cooper & Maddock 1999 eq. 1, 3, 4), the edge-repulsion
 //!   element (ibid. eq. 5) and the shape-based element (rest shape rotated about the cell

@@ -16,3 +16,6 @@ mod cooper;
 
 #[path = "only2d/cantilever.rs"]
 mod cantilever;
+
+#[path = "only2d/polygon.rs"]
+mod polygon;

@@ -12,3 +12,6 @@ mod shared;
 
 #[path = "only3d/rotation.rs"]
 mod rotation;
+
+#[path = "only3d/shapes.rs"]
+mod shapes_3d;

@@ -8,7 +8,9 @@
 //! that contact and rendering use.
 
 pub mod cube;
+pub mod io;
 mod lattice;
+mod voxel;
 
 use std::collections::HashMap;
 
