@@ -64,7 +64,10 @@ impl DeformableWorld {
         let dt = self.physics.integration_parameters.dt;
         let substep = deformable.stable_substep() * settings.safety;
         let substeps = f64::from(dt) / f64::from(substep);
-        if settings.fixed_substeps.is_none() && !(substeps <= settings.max_substeps as f64) {
+        let fits = substeps.partial_cmp(&(settings.max_substeps as f64))
+            != Some(std::cmp::Ordering::Greater)
+            && substeps.is_finite();
+        if settings.fixed_substeps.is_none() && !fits {
             let err = BuildError::TooStiff {
                 substeps,
                 substep,
