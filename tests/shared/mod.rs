@@ -11,6 +11,7 @@ mod mesh;
 mod metrics;
 mod parallel;
 mod pipeline;
+mod properties;
 mod scenes;
 mod sleep;
 mod support;
