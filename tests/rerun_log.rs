@@ -103,3 +103,50 @@ fall_to_rrd!(
     "2d",
     "LineStrips2D:strips"
 );
+
+/// A body that blows up is frozen, and the log says so: a warning text entry at
+/// `events/<name>` naming the cause, and the `frozen` series.
+#[test]
+fn a_frozen_body_is_logged_as_a_warning() {
+    use sinew::dim3::math::{Vector, DIM};
+    use sinew::dim3::{
+        DeformableBuilder, DeformableWorld, RecorderOptions, RerunRecorder, Stiffness,
+    };
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rerun");
+    let rrd = dir.join("frozen.rrd");
+    let _ = std::fs::remove_file(&rrd);
+    let mut world = DeformableWorld::new();
+    world.pipeline.settings.fixed_substeps = Some(1);
+    let h = world.insert(
+        DeformableBuilder::cuboid(Vector::splat(0.25), [3; DIM])
+            .stiffness(Stiffness::Raw { k: 1e9, c: 0.0 })
+            .build()
+            .unwrap(),
+    );
+    let mut kick = world.deformables[h].positions().to_vec();
+    kick[0] += Vector::splat(0.05);
+    world.deformables[h].set_positions(&kick).unwrap();
+    let mut recorder = RerunRecorder::save("sinew-test", &rrd, RecorderOptions::default()).unwrap();
+    recorder.set_name(h, "jelly");
+    for _ in 0..60 {
+        world.step();
+        recorder.log_world(&world).unwrap();
+    }
+    assert!(world.deformables[h].is_frozen());
+    recorder.flush();
+    drop(recorder);
+    let py = python();
+    let out = Command::new(&py)
+        .args(["tests/rerun/check_events.py"])
+        .arg(&rrd)
+        .args(["/events/jelly", "frozen", "WARN"])
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {} ({e}); see .ci/run", py.display()));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "the Python check failed:\n{stdout}\n{stderr}"
+    );
+    assert!(stdout.contains("checked"), "{stdout}");
+}

@@ -54,6 +54,16 @@ pub struct Deformable {
 }
 
 impl Deformable {
+    /// The largest stable substep (s) at the current state, from the same bound the pipeline
+    /// uses before its `safety` factor: the state is not changed (a copy of the element state
+    /// is evaluated).
+    pub fn stable_substep(&self) -> Real {
+        let mut state = self.state.clone();
+        let mut acc = Accumulator::new(self.positions.len());
+        let limiter = state.accumulate(&self.positions, &self.velocities, &mut acc);
+        super::pipeline::stable_substep(&self.masses, &acc.stiffness, &acc.damping).min(limiter)
+    }
+
     /// The rest mesh.
     pub fn mesh(&self) -> &Mesh {
         &self.mesh
@@ -236,7 +246,7 @@ impl Deformable {
     /// Sets all node positions. Errors if the count differs or a coordinate is not finite; the
     /// state is unchanged then.
     pub fn set_positions(&mut self, positions: &[Vector]) -> Result<(), BuildError> {
-        check_state(positions, self.positions.len())?;
+        check_state("positions", positions, self.positions.len())?;
         self.positions.copy_from_slice(positions);
         self.forces_valid = false;
         self.wake_up();
@@ -246,7 +256,7 @@ impl Deformable {
     /// Sets all node velocities. Errors if the count differs or a component is not finite; the
     /// state is unchanged then.
     pub fn set_velocities(&mut self, velocities: &[Vector]) -> Result<(), BuildError> {
-        check_state(velocities, self.velocities.len())?;
+        check_state("velocities", velocities, self.velocities.len())?;
         self.velocities.copy_from_slice(velocities);
         self.forces_valid = false;
         self.wake_up();
@@ -255,7 +265,7 @@ impl Deformable {
 
     /// Gives every node the same velocity.
     pub fn set_uniform_velocity(&mut self, velocity: Vector) -> Result<(), BuildError> {
-        check_state(&[velocity], 1)?;
+        check_state("velocity", &[velocity], 1)?;
         self.velocities.fill(velocity);
         self.forces_valid = false;
         self.wake_up();
@@ -276,12 +286,12 @@ pub struct ContactPoint {
     pub node: u32,
 }
 
-fn check_state(values: &[Vector], expected: usize) -> Result<(), BuildError> {
+fn check_state(what: &'static str, values: &[Vector], expected: usize) -> Result<(), BuildError> {
     if values.len() != expected {
-        return Err(BuildError::InvalidParameter {
-            name: "node state length",
-            value: values.len() as Real,
-            expected: "one value per node",
+        return Err(BuildError::WrongLength {
+            what,
+            got: values.len(),
+            expected,
         });
     }
     if let Some((node, p)) = values.iter().enumerate().find(|(_, p)| !p.is_finite()) {
@@ -322,6 +332,7 @@ pub struct DeformableBuilder {
     groups: InteractionGroups,
     ignore_attached_bodies: bool,
     can_sleep: bool,
+    deny_warnings: bool,
     user_data: u128,
 }
 
@@ -358,6 +369,7 @@ impl DeformableBuilder {
             groups: InteractionGroups::all(),
             ignore_attached_bodies: true,
             can_sleep: true,
+            deny_warnings: false,
             user_data: 0,
         }
     }
@@ -447,6 +459,14 @@ impl DeformableBuilder {
         self
     }
 
+    /// Whether [`Mesh::diagnose`]'s warnings (coincident nodes, a surface that is not
+    /// manifold, separate pieces) are errors ([`BuildError::MeshWarning`], the first one
+    /// found); default `false`: they are legal, and a cut mesh may be meant.
+    pub fn deny_warnings(mut self, deny: bool) -> Self {
+        self.deny_warnings = deny;
+        self
+    }
+
     /// Whether the body may fall asleep when it rests (default `true`, as rapier's bodies;
     /// thresholds in [`PipelineSettings`](super::PipelineSettings)).
     pub fn can_sleep(mut self, can_sleep: bool) -> Self {
@@ -469,6 +489,11 @@ impl DeformableBuilder {
                 resolution,
             } => Mesh::cuboid(half_extents, resolution, self.cells)?,
         };
+        if self.deny_warnings {
+            if let Some(w) = mesh.diagnose().into_iter().next() {
+                return Err(BuildError::MeshWarning(w));
+            }
+        }
         let params = Resolved::new(self.material, self.stiffness)?;
         let finite = |name, v: Vector| {
             if v.is_finite() {

@@ -61,6 +61,50 @@ pub enum BuildError {
         /// Its signed rest volume (area in 2D); for hexahedra/quads the smallest corner volume.
         volume: Real,
     },
+    /// A per-node list (positions, velocities) of the wrong length.
+    #[error("{what}: got {got} values, but the deformable has {expected} nodes")]
+    WrongLength {
+        /// Which list.
+        what: &'static str,
+        /// Its length.
+        got: usize,
+        /// Number of nodes.
+        expected: usize,
+    },
+    /// Two cells have the same vertices.
+    #[error("cell {cell} has the same vertices as cell {first}")]
+    DuplicateCell {
+        /// The later cell.
+        cell: usize,
+        /// The earlier one.
+        first: usize,
+    },
+    /// A face is shared by more than two cells: cells overlap (or a mesh was concatenated
+    /// with itself).
+    #[error("the face with nodes {face:?} belongs to {cells} cells; a face belongs to at most two (cells overlap)")]
+    OverlappingCells {
+        /// The face's nodes.
+        face: Vec<u32>,
+        /// How many cells share it.
+        cells: usize,
+    },
+    /// A mesh warning ([`MeshWarning`](super::mesh::MeshWarning)) turned into an error by
+    /// `DeformableBuilder::deny_warnings`.
+    #[error("mesh warning denied: {0}")]
+    MeshWarning(super::mesh::MeshWarning),
+    /// The material is so stiff for its mass that one step needs more substeps than the
+    /// pipeline allows (`PipelineSettings::max_substeps`).
+    #[error("too stiff for the step: a step of {dt} s needs {substeps:.0} substeps at rest (stable substep {substep:e} s), more than the {max_substeps} allowed; lower the stiffness, raise the mass or shorten the step")]
+    TooStiff {
+        /// Substeps one step needs at rest.
+        substeps: f64,
+        /// The largest stable substep at rest, s.
+        substep: Real,
+        /// The step, s.
+        dt: Real,
+        /// The pipeline's cap.
+        max_substeps: usize,
+    },
     /// A node belongs to no cell, so it would have no mass.
     #[error("node {node} belongs to no cell (it would have no mass)")]
     UnreferencedNode {

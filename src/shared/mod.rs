@@ -29,7 +29,7 @@ pub use body::{Deformable, DeformableBuilder};
 pub use error::BuildError;
 pub use events::{ChannelEventCollector, DeformableContactEvent, DeformableEventHandler};
 pub use material::{Material, Stiffness};
-pub use mesh::{CellKind, Mesh};
+pub use mesh::{CellKind, Mesh, MeshWarning};
 pub use model::{ElementModel, RotationFit, ShapeDamping};
 pub use pipeline::{DeformablePipeline, PipelineSettings};
 #[cfg(feature = "rerun")]

@@ -23,7 +23,7 @@ use std::time::Instant;
 use super::body::{ContactPoint, Deformable};
 use super::contact::{self, BodyMotion, Candidate, MotionKind};
 use super::events::{DeformableContactEvent, DeformableEventHandler};
-use super::math::{self, Real, Vector, FACET_ARITY};
+use super::math::{self, AngVector, Pose, Real, Vector, DIM, FACET_ARITY};
 use super::rapier::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
 use super::rapier::geometry::{Aabb, BoundingVolume, BroadPhaseBvh, ColliderHandle, ColliderSet};
 use super::report::StepReport;
@@ -43,6 +43,12 @@ pub struct PipelineSettings {
     pub fixed_substeps: Option<usize>,
     /// Approach speeds below this (m/s) give a resting contact, not a bounce (default 0.1).
     pub restitution_threshold: Real,
+    /// A cell whose volume grows past `max_stretch^DIM` times its rest volume means the body
+    /// blew up (default 10: a tenfold stretch in every direction, far past any elastic
+    /// material): the step is rolled back and the body frozen, as for a non-finite state
+    /// ([`DeformableReport::exploded`](super::DeformableReport::exploded)). Infinite turns the
+    /// test off.
+    pub max_stretch: Real,
     /// A body whose every free node is slower than this (m/s) is still (default 0.05 m/s,
     /// rapier 0.36's default `normalized_linear_threshold` at unit length).
     pub sleep_speed: Real,
@@ -58,6 +64,7 @@ impl Default for PipelineSettings {
             max_substeps: 20_000,
             fixed_substeps: None,
             restitution_threshold: 0.1,
+            max_stretch: 10.0,
             sleep_speed: 0.05,
             time_until_sleep: 0.5,
         }
@@ -97,6 +104,9 @@ struct Scratch {
     /// Colliders touched this step (for the events), and the contacts being assembled.
     now: Vec<ColliderHandle>,
     contacts: Vec<ContactPoint>,
+    /// The dynamic bodies a deformable may push this step, as they were before it, for a
+    /// rollback: handle, pose, linear and angular velocity.
+    backup: Vec<(RigidBodyHandle, Pose, Vector, AngVector)>,
 }
 
 /// Most feature crossings resolved per surface facet and substep.
@@ -465,6 +475,13 @@ impl DeformablePipeline {
         sc.near.extend(candidates.iter().map(|c| c.handle));
         sc.touched_colliders.clear();
         sc.touched_colliders.resize(candidates.len(), false);
+        sc.backup.clear();
+        for m in sc.motions.iter().filter(|m| m.kind == MotionKind::Dynamic) {
+            if let Some(rb) = bodies.get(m.handle) {
+                sc.backup
+                    .push((m.handle, *rb.position(), rb.linvel(), rb.angvel()));
+            }
+        }
 
         sc.surface_slot.clear();
         sc.surface_slot.resize(n, u32::MAX);
@@ -787,16 +804,33 @@ impl DeformablePipeline {
             .extend(sc.last_contact.iter().flatten().copied());
         sc.contacts.append(&mut body.contacts);
         std::mem::swap(&mut body.contacts, &mut sc.contacts);
-        // Non-finite, or so far out that it can only be a blow-up (|x| or |v| above 1e8).
+        // Non-finite, or so far out that it can only be a blow-up (|x| or |v| above 1e8), or a
+        // cell stretched past any material.
         let sane = |v: &Vector| v.is_finite() && v.abs().max_element() < 1e8;
         let finite = body.positions.iter().all(sane) && body.velocities.iter().all(sane);
+        let most = settings.max_stretch.powi(DIM as i32);
+        let exploded = finite
+            && most.is_finite()
+            && (0..body.mesh.num_cells())
+                .any(|c| body.mesh.cell_quality(c, &body.positions) > most);
         body.report.non_finite = !finite;
-        if !finite {
+        body.report.exploded = exploded;
+        if !finite || exploded {
             body.positions.copy_from_slice(&body.saved_positions);
             body.velocities.copy_from_slice(&body.saved_velocities);
             body.frozen = true;
             body.forces_valid = false;
+            // The bodies it pushed this step get their state back: a blow-up must not
+            // launch them.
+            for (h, pose, linvel, angvel) in &sc.backup {
+                if let Some(rb) = bodies.get_mut(*h) {
+                    rb.set_position(*pose, false);
+                    rb.set_linvel(*linvel, false);
+                    rb.set_angvel(*angvel, false);
+                }
+            }
         }
+        let finite = finite && !exploded;
         let mut max_penetration: Real = 0.0;
         for (k, &i) in surface.iter().enumerate() {
             let (b0, b1) = (sc.node_start[k] as usize, sc.node_start[k + 1] as usize);

@@ -44,8 +44,15 @@ pub struct DeformableReport {
     /// Simulated time skipped because the substep cap was reached, s.
     pub lost_time: Real,
     /// Whether the state turned non-finite (or beyond 1e8 in position or velocity) during this
-    /// step: the body was rolled back to the start of the step and frozen.
+    /// step: the body was rolled back to the start of the step (and the rigid bodies it pushed
+    /// during it too) and frozen.
     pub non_finite: bool,
+    /// Whether a cell grew past [`PipelineSettings::max_stretch`] during this step (a
+    /// blow-up while still finite): the body was rolled back to the start of the step, the
+    /// rigid bodies it pushed during it were given their state back, and it was frozen.
+    ///
+    /// [`PipelineSettings::max_stretch`]: super::PipelineSettings::max_stretch
+    pub exploded: bool,
     /// Whether the body is frozen (not simulated).
     pub frozen: bool,
     /// Whether the body is asleep (not simulated this step; see

@@ -16,7 +16,8 @@
 //! | `world/deformables/<name>/attachments` | segment node → its anchor on the bone | if `attachments` |
 //! | `world/deformables/<name>/contacts/points`, `.../contacts/normals` | last step's contact points and normals | if `contacts` |
 //! | `world/colliders/<index>_<generation>` | the collider's shape (static) and pose (per frame); grey fixed, orange kinematic (bones), blue dynamic | every logged frame |
-//! | `stats/<name>/<metric>` | `Scalars`: `kinetic_energy`, `elastic_energy`, `inverted_elements`, `min_volume_ratio`, `max_penetration`, `contacts`, `substeps`, `ms_forces`, `ms_contacts`, `ms_integrate`, `log_ms` | every logged frame |
+//! | `stats/<name>/<metric>` | `Scalars`: `kinetic_energy`, `elastic_energy`, `inverted_elements`, `min_volume_ratio`, `max_penetration`, `contacts`, `substeps`, `ms_forces`, `ms_contacts`, `ms_integrate`, `frozen` (0/1), `log_ms` | every logged frame |
+//! | `events/<name>` | `TextLog`: a warning when the body is frozen (why: non-finite state or a blow-up), info when it resumes | when it changes |
 //!
 //! `<name>` is what [`RerunRecorder::set_name`] gave the deformable, else `d<index>`.
 //!
@@ -36,7 +37,7 @@ use super::rapier::geometry::{ColliderHandle, ColliderSet};
 use super::render;
 use super::set::{DeformableHandle, DeformableSet};
 use super::world::DeformableWorld;
-use rerun::{Color, Scalars};
+use rerun::{Color, Scalars, TextLog, TextLogLevel};
 pub use rerun::{RecordingStream, RecordingStreamBuilder};
 
 /// Which field colours the surface.
@@ -108,6 +109,8 @@ struct DeformableLog {
     pair_start: Vec<u32>,
     pairs: Vec<(u32, Real)>,
     topology_logged: bool,
+    /// Whether the body was frozen at the last logged frame.
+    was_frozen: bool,
 }
 
 /// Logs worlds to Rerun. See the module documentation for the entity paths.
@@ -353,6 +356,7 @@ impl DeformableLog {
             pair_start: pcount,
             pairs,
             topology_logged: false,
+            was_frozen: false,
         }
     }
 
@@ -488,6 +492,31 @@ impl DeformableLog {
         scalar("ms_forces", r.time_forces * 1e3)?;
         scalar("ms_contacts", r.time_contacts * 1e3)?;
         scalar("ms_integrate", r.time_integrate * 1e3)?;
+        scalar("frozen", if body.is_frozen() { 1.0 } else { 0.0 })?;
+        if body.is_frozen() != self.was_frozen {
+            let text = if !body.is_frozen() {
+                format!("{} resumed", self.name)
+            } else if r.non_finite {
+                format!(
+                    "{} frozen: its state turned non-finite; rolled back to the start of the step",
+                    self.name
+                )
+            } else if r.exploded {
+                format!("{} frozen: a cell stretched past max_stretch (a blow-up); rolled back to the start of the step", self.name)
+            } else {
+                format!("{} frozen", self.name)
+            };
+            let level = if body.is_frozen() {
+                TextLogLevel::WARN
+            } else {
+                TextLogLevel::INFO
+            };
+            rec.log(
+                format!("events/{}", self.name),
+                &TextLog::new(text).with_level(level),
+            )?;
+            self.was_frozen = body.is_frozen();
+        }
         Ok(())
     }
 }

@@ -3,6 +3,7 @@
 
 use super::attach::AttachError;
 use super::body::Deformable;
+use super::error::BuildError;
 use super::events::DeformableEventHandler;
 use super::math::Real;
 use super::pipeline::DeformablePipeline;
@@ -43,8 +44,39 @@ impl DeformableWorld {
     }
 
     /// Inserts a deformable.
+    ///
+    /// A body too stiff for the step is accepted: each step then takes at most
+    /// `pipeline.settings.max_substeps` substeps and drops the rest of the step for that body,
+    /// which its report says (`substep_cap_hit`, `lost_time`). [`DeformableWorld::try_insert`]
+    /// refuses it instead.
     pub fn insert(&mut self, deformable: Deformable) -> DeformableHandle {
         self.deformables.insert(deformable)
+    }
+
+    /// Inserts a deformable unless one step at the current `dt` would need more substeps at
+    /// rest than `pipeline.settings.max_substeps` ([`BuildError::TooStiff`]); the deformable
+    /// is handed back with the error.
+    pub fn try_insert(
+        &mut self,
+        deformable: Deformable,
+    ) -> Result<DeformableHandle, (Box<Deformable>, BuildError)> {
+        let settings = self.pipeline.settings;
+        let dt = self.physics.integration_parameters.dt;
+        let substep = deformable.stable_substep() * settings.safety;
+        let substeps = f64::from(dt) / f64::from(substep);
+        let fits = substeps.partial_cmp(&(settings.max_substeps as f64))
+            != Some(std::cmp::Ordering::Greater)
+            && substeps.is_finite();
+        if settings.fixed_substeps.is_none() && !fits {
+            let err = BuildError::TooStiff {
+                substeps,
+                substep,
+                dt,
+                max_substeps: settings.max_substeps,
+            };
+            return Err((Box::new(deformable), err));
+        }
+        Ok(self.deformables.insert(deformable))
     }
 
     /// Sets the step length (rapier's `integration_parameters.dt`).

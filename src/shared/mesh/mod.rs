@@ -9,8 +9,11 @@
 
 pub mod cube;
 pub mod io;
+mod diagnose;
 mod lattice;
 mod voxel;
+
+pub use diagnose::MeshWarning;
 
 use std::collections::HashMap;
 
@@ -69,7 +72,10 @@ impl Mesh {
     /// Errors: [`BuildError::EmptyMesh`], [`BuildError::MalformedCells`],
     /// [`BuildError::NonFiniteCoordinate`], [`BuildError::IndexOutOfRange`],
     /// [`BuildError::DegenerateElement`], [`BuildError::InvertedElement`],
-    /// [`BuildError::UnreferencedNode`].
+    /// [`BuildError::UnreferencedNode`], [`BuildError::DuplicateCell`],
+    /// [`BuildError::OverlappingCells`]. What is legal but
+    /// probably a mistake (coincident nodes, a surface that is not manifold, separate pieces)
+    /// is listed by [`Mesh::diagnose`].
     pub fn new(nodes: Vec<Vector>, cells: Vec<u32>, kind: CellKind) -> Result<Mesh, BuildError> {
         let arity = kind.arity();
         if nodes.is_empty() || cells.is_empty() {
@@ -106,6 +112,16 @@ impl Mesh {
         }
         if let Some(node) = referenced.iter().position(|r| !r) {
             return Err(BuildError::UnreferencedNode { node });
+        }
+
+        let mut seen = HashMap::with_capacity(cells.len() / arity);
+        for (cell, c) in cells.chunks_exact(arity).enumerate() {
+            let mut key = [u32::MAX; 8];
+            key[..arity].copy_from_slice(c);
+            key[..arity].sort_unstable();
+            if let Some(first) = seen.insert(key, cell) {
+                return Err(BuildError::DuplicateCell { cell, first });
+            }
         }
 
         let mut rest_volumes = Vec::with_capacity(cells.len() / arity);
@@ -147,7 +163,7 @@ impl Mesh {
             boundary_facets: Vec::new(),
             boundary_nodes: Vec::new(),
         };
-        mesh.extract_boundary();
+        mesh.extract_boundary()?;
         Ok(mesh)
     }
 
@@ -258,7 +274,7 @@ impl Mesh {
         out
     }
 
-    fn extract_boundary(&mut self) {
+    fn extract_boundary(&mut self) -> Result<(), BuildError> {
         let local_faces: Vec<Vec<usize>> = match self.kind {
             CellKind::Simplex => (0..SIMPLEX_ARITY)
                 .map(|skip| (0..SIMPLEX_ARITY).filter(|&k| k != skip).collect())
@@ -289,6 +305,13 @@ impl Mesh {
                 }
             }
         }
+        if let Some(&(count, cell, lf)) = faces_found.iter().find(|f| f.0 > 2) {
+            let c = &self.cells[cell * arity..(cell + 1) * arity];
+            return Err(BuildError::OverlappingCells {
+                face: local_faces[lf].iter().map(|&l| c[l]).collect(),
+                cells: count as usize,
+            });
+        }
         let mut on_boundary = vec![false; self.nodes.len()];
         for &(count, cell, lf) in &faces_found {
             if count != 1 {
@@ -318,6 +341,7 @@ impl Mesh {
         self.boundary_nodes = (0..self.nodes.len() as u32)
             .filter(|&i| on_boundary[i as usize])
             .collect();
+        Ok(())
     }
 }
 
