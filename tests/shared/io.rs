@@ -180,27 +180,38 @@ fn gmsh_v41_sparse_tags_blocks_and_lower_dimensional_elements() {
     );
     t += "$EndNodes\n";
     let tags: Vec<String> = (1..=n).map(|k| (10 * k).to_string()).collect();
-    t += "$Elements\n3 4 1 4\n";
+    t += "$Elements\n3 3 1 4\n";
     t += "0 1 15 1\n1 7\n";
     t += &format!("{} 2 {FACET_GMSH} 1\n2 {}\n", DIM - 1, tags[1..].join(" "));
-    t += &format!("{DIM} 1 {SIMPLEX_GMSH} 2\n3 {}\n", tags.join(" "));
-    // The same cell listed inverted: it is reoriented.
+    // The cell listed inverted: it is reoriented. (Listed a second time, upright, it would be
+    // a duplicate cell: an error.)
     let mut inverted = tags.clone();
     inverted.swap(0, 1);
-    t += &format!("4 {}\n$EndElements\n", inverted.join(" "));
-    let m = gmsh::read_str(&t).unwrap();
+    let cells = format!(
+        "{DIM} 1 {SIMPLEX_GMSH} 1\n4 {}\n$EndElements\n",
+        inverted.join(" ")
+    );
+    let m = gmsh::read_str(&(t.clone() + &cells)).unwrap();
     assert_eq!(
         m.nodes(),
         &nodes[..],
         "geometry point 7 dropped, order kept"
     );
-    assert_eq!(m.num_cells(), 2);
+    assert_eq!(m.num_cells(), 1);
     assert!(m.rest_volumes().iter().all(|v| *v > 0.0));
     assert_eq!(
-        m.cell(1),
+        m.cell(0),
         &[0, 1, 2, 3][..DIM + 1],
         "inverted cell reordered"
     );
+    let twice = format!(
+        "{DIM} 1 {SIMPLEX_GMSH} 2\n3 {}\n4 {}\n$EndElements\n",
+        tags.join(" "),
+        inverted.join(" ")
+    );
+    let t = t.replace("$Elements\n3 3 1 4\n", "$Elements\n3 4 1 4\n");
+    let e = gmsh::read_str(&(t + &twice)).unwrap_err();
+    assert!(e.to_string().contains("same vertices as cell 0"), "{e}");
 }
 
 #[test]
