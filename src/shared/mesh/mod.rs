@@ -8,8 +8,8 @@
 //! that contact and rendering use.
 
 pub mod cube;
-pub mod io;
 mod diagnose;
+pub mod io;
 mod lattice;
 mod voxel;
 
