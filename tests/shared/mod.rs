@@ -3,6 +3,7 @@
 mod bones;
 mod cantilever;
 mod contact;
+mod determinism;
 mod elements;
 mod errors;
 mod fall;
@@ -12,4 +13,5 @@ mod parallel;
 mod pipeline;
 mod scenes;
 mod sleep;
+mod snapshot;
 mod support;
