@@ -5,8 +5,10 @@
 //! [`Mesh`](super::Mesh), the pipeline, its settings and reports, and every plain type they
 //! hold implement serde's `Serialize` and `Deserialize`; rapier's own sets serialize through
 //! rapier's `serde-serialize` feature, which `serde` turns on. Pick any serde format that
-//! stores `f32` exactly and accepts non-finite floats (an empty report holds `∞`), such as
-//! `bincode`; JSON does not qualify (it writes `∞` as `null`).
+//! restores every `f32` exactly: `bincode` 1.x stores the bits; `serde_json` writes the
+//! shortest decimal that reads back to the same `f32`, and reads it back exactly with its
+//! `float_roundtrip` feature (the tests run both). No saved value is infinite (a missing
+//! crossing limit is saved as `None`), so JSON, which has no infinity, can hold a snapshot.
 //!
 //! The whole [`DeformableWorld`](super::DeformableWorld) is the natural unit: one value holds
 //! both sides, rapier's bodies, colliders, joints, broad and narrow phases, islands and
@@ -134,7 +136,9 @@ mod imp {
         warm_start: Cow<'a, [Rotation]>,
         acc: Cow<'a, Accumulator>,
         forces_valid: bool,
-        limiter: Real,
+        /// The crossing limiter's bound; `None` for none (infinite), so that formats without
+        /// infinities (JSON) can hold it.
+        limiter: Option<Real>,
         contact: ContactMaterial,
         gravity_scale: Real,
         frozen: bool,
@@ -160,7 +164,7 @@ mod imp {
                 warm_start: Cow::Borrowed(self.state.warm_start()),
                 acc: Cow::Borrowed(&self.acc),
                 forces_valid: self.forces_valid,
-                limiter: self.limiter,
+                limiter: Some(self.limiter).filter(|l| l.is_finite()),
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
                 frozen: self.frozen,
@@ -250,7 +254,7 @@ mod imp {
                 inv_masses,
                 acc,
                 forces_valid: self.forces_valid,
-                limiter: self.limiter,
+                limiter: self.limiter.unwrap_or(Real::INFINITY),
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
                 frozen: self.frozen,
