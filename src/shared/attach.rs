@@ -19,6 +19,7 @@ use super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::rapier::geometry::{ColliderHandle, ColliderSet};
 
 /// A node bound to a rigid body.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Attachment {
     /// The node.

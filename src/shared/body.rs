@@ -274,6 +274,7 @@ impl Deformable {
 }
 
 /// A contact between a deformable and a collider.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct ContactPoint {
     /// Point on the collider's surface, world frame.
@@ -286,7 +287,11 @@ pub struct ContactPoint {
     pub node: u32,
 }
 
-fn check_state(what: &'static str, values: &[Vector], expected: usize) -> Result<(), BuildError> {
+pub(crate) fn check_state(
+    what: &'static str,
+    values: &[Vector],
+    expected: usize,
+) -> Result<(), BuildError> {
     if values.len() != expected {
         return Err(BuildError::WrongLength {
             what,
@@ -301,6 +306,21 @@ fn check_state(what: &'static str, values: &[Vector], expected: usize) -> Result
         });
     }
     Ok(())
+}
+
+/// Lumped node masses (each cell's mass shared equally by its vertices) and their inverses.
+/// A snapshot rebuilds them with this same function, so they come back bit for bit.
+pub(crate) fn lumped_masses(mesh: &Mesh, params: &Resolved) -> (Vec<Real>, Vec<Real>) {
+    let arity = mesh.kind().arity() as Real;
+    let mut masses = vec![0.0; mesh.nodes().len()];
+    for (cell, ids) in mesh.cells().enumerate() {
+        let m = params.material.density * mesh.rest_volumes()[cell] / arity;
+        for &i in ids {
+            masses[i as usize] += m;
+        }
+    }
+    let inv_masses = masses.iter().map(|m| 1.0 / m).collect();
+    (masses, inv_masses)
 }
 
 enum Source {
@@ -547,15 +567,7 @@ impl DeformableBuilder {
         }
 
         let n = mesh.nodes().len();
-        let arity = mesh.kind().arity() as Real;
-        let mut masses = vec![0.0; n];
-        for (cell, ids) in mesh.cells().enumerate() {
-            let m = params.material.density * mesh.rest_volumes()[cell] / arity;
-            for &i in ids {
-                masses[i as usize] += m;
-            }
-        }
-        let inv_masses = masses.iter().map(|m| 1.0 / m).collect();
+        let (masses, inv_masses) = lumped_masses(&mesh, &params);
         let state = ModelState::build(self.model, &mesh, &masses, &params, rotation)?;
         let positions: Vec<Vector> = mesh
             .nodes()

@@ -59,6 +59,7 @@ use super::rapier::parry::query::DefaultQueryDispatcher;
 use super::rapier::pipeline::QueryFilter;
 
 /// Contact coefficients and filters of a deformable.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub(crate) struct ContactMaterial {
     pub friction: Real,

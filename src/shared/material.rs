@@ -16,6 +16,7 @@ use super::math::Real;
 /// in 3D, 0.2 in 2D; edge repulsion 7/47 ≈ 0.15 in 3D, 0.2 in 2D); `poisson_ratio` is kept for
 /// peers that can use it and for reports. Each model's `s` is derived so that the lattice's
 /// Young's modulus along an axis is `E`; the `cantilever` scene checks it against beam theory.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Material {
     /// Mass density, kg/m³ (kg/m² in 2D). Must be positive.
@@ -40,6 +41,7 @@ impl Default for Material {
 }
 
 /// Where element stiffness comes from.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq, Default)]
 pub enum Stiffness {
     /// From the [`Material`]'s Young's modulus and damping ratio (the default).

@@ -21,6 +21,7 @@ mod recorder;
 mod report;
 pub mod scenes;
 mod set;
+pub mod snapshot;
 mod world;
 
 pub use attach::{AttachError, Attachment};

@@ -30,6 +30,7 @@ use super::report::StepReport;
 use super::set::DeformableSet;
 
 /// Knobs of the pipeline.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct PipelineSettings {
     /// Fraction of the stability bound used as the largest substep (default 0.5: the
@@ -72,10 +73,13 @@ impl Default for PipelineSettings {
 }
 
 /// Steps deformables beside a rapier world. Holds only settings and scratch buffers.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, Default)]
 pub struct DeformablePipeline {
     /// The knobs.
     pub settings: PipelineSettings,
+    /// Buffers rebuilt within every step: not part of a snapshot.
+    #[cfg_attr(feature = "serde", serde(skip))]
     scratch: Scratch,
     report: StepReport,
 }

@@ -4,6 +4,7 @@ use super::math::Real;
 use super::set::DeformableHandle;
 
 /// Diagnostics of one deformable over the last step.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DeformableReport {
     /// Kinetic energy `Σ ½ m v²` at the end of the step, J.
@@ -68,6 +69,7 @@ pub struct DeformableReport {
 }
 
 /// Diagnostics of one pipeline step.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, Default)]
 pub struct StepReport {
     /// The step's duration, s.

@@ -7,7 +7,9 @@ use super::rapier::data::arena::{Arena, Index as ArenaIndex};
 
 /// The handle of a deformable in a [`DeformableSet`]. A handle of a removed deformable never
 /// aliases a later one (generational index).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", serde(transparent))]
 #[repr(transparent)]
 pub struct DeformableHandle(pub ArenaIndex);
 
@@ -24,7 +26,9 @@ impl DeformableHandle {
 }
 
 /// The set of all deformables of a world.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "serde", serde(transparent))]
 pub struct DeformableSet {
     arena: Arena<Deformable>,
 }

@@ -14,6 +14,11 @@ use super::report::StepReport;
 use super::set::{DeformableHandle, DeformableSet};
 
 /// Rapier's [`PhysicsWorld`] plus deformables.
+///
+/// With the `serde` feature the whole world is one snapshot: serialize it mid-run, deserialize
+/// it later, and stepping the restored world continues bit for bit as the original would have
+/// (see [`snapshot`](super::snapshot) for what is saved and what is rebuilt).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DeformableWorld {
     /// The rigid-body world (bodies, colliders, joints, gravity, `integration_parameters.dt`).
     pub physics: PhysicsWorld,

@@ -3,6 +3,7 @@
 mod bones;
 mod cantilever;
 mod contact;
+mod determinism;
 mod elements;
 mod errors;
 mod fall;
@@ -17,5 +18,6 @@ mod properties;
 mod scenes;
 mod shapes;
 mod sleep;
+mod snapshot;
 mod support;
 mod validation;

@@ -22,6 +22,7 @@ use super::math::{self, Real, Vector, DIM, DIM_FACTORIAL, FACET_ARITY, SIMPLEX_A
 use cube::{bits_to_vtk, faces, kuhn_simplices, vtk_to_bits, CUBE_ARITY};
 
 /// The kind of cell a mesh is made of.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Default)]
 pub enum CellKind {
     /// Triangles (2D) or tetrahedra (3D).

@@ -65,6 +65,7 @@ use super::math::{Real, Rotation, Vector};
 use super::mesh::{CellKind, Mesh};
 
 /// How the shape-based element finds its cell's rotation.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum RotationFit {
     /// The paper's update (its eq. 11–16), `n ≥ 1` times per substep, warm-started from the
@@ -76,6 +77,7 @@ pub enum RotationFit {
 }
 
 /// Which velocity the shape-based element damps.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Default)]
 pub enum ShapeDamping {
     /// Velocity relative to the cell's least-squares rigid motion (translation and spin):
@@ -88,6 +90,7 @@ pub enum ShapeDamping {
 }
 
 /// The element model of a deformable.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum ElementModel {
     /// Damped linear springs on every vertex pair of every cell (Cooper & Maddock eq. 1, 3).
@@ -141,6 +144,7 @@ impl ElementModel {
 }
 
 /// Per-node accumulators filled by the force loops.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Accumulator {
     /// Force on each node.
@@ -324,6 +328,27 @@ impl ModelState {
                 s.accumulate(x, v, acc);
                 Real::INFINITY
             }
+        }
+    }
+
+    /// The state the model carries from one substep to the next: the shape-based element's
+    /// per-cell warm-start rotations (empty for the other models, whose terms are pure
+    /// functions of the node state).
+    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
+    pub fn warm_start(&self) -> &[Rotation] {
+        match &self.elements {
+            Elements::ShapeMatching(s) => s.rotations(),
+            _ => &[],
+        }
+    }
+
+    /// Restores [`ModelState::warm_start`]. `Err(expected length)` if the length is wrong.
+    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
+    pub fn set_warm_start(&mut self, rotations: &[Rotation]) -> Result<(), usize> {
+        match &mut self.elements {
+            Elements::ShapeMatching(s) => s.set_rotations(rotations),
+            _ if rotations.is_empty() => Ok(()),
+            _ => Err(0),
         }
     }
 

@@ -194,6 +194,22 @@ impl ShapeMatching {
         out
     }
 
+    /// Each cell's warm-start rotation (the last fitted one).
+    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
+    pub fn rotations(&self) -> &[Rotation] {
+        &self.rotations
+    }
+
+    /// Restores the warm-start rotations. `Err(expected length)` if the length is wrong.
+    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
+    pub fn set_rotations(&mut self, rotations: &[Rotation]) -> Result<(), usize> {
+        if rotations.len() != self.rotations.len() {
+            return Err(self.rotations.len());
+        }
+        self.rotations.copy_from_slice(rotations);
+        Ok(())
+    }
+
     /// Adds the cells' bounds that do not change with the state: the row bound of
     /// `k (𝟙 − 𝟏𝟏ᵀ/n)`, `2k(1 − 1/n) ≤ 2k`. The fitted rotation's dependence on the nodes adds
     /// a part that does change ([`ShapeMatching::turning_stiffness`]).

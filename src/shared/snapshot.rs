@@ -1,0 +1,273 @@
+//! Snapshots (feature `serde`): save a running simulation and continue it later, bit for bit.
+//!
+//! With the `serde` feature, [`DeformableWorld`](super::DeformableWorld),
+//! [`DeformableSet`](super::DeformableSet), [`Deformable`](super::Deformable),
+//! [`Mesh`](super::Mesh), the pipeline, its settings and reports, and every plain type they
+//! hold implement serde's `Serialize` and `Deserialize`; rapier's own sets serialize through
+//! rapier's `serde-serialize` feature, which `serde` turns on. Pick any serde format that
+//! restores every `f32` exactly: `bincode` 1.x stores the bits; `serde_json` writes the
+//! shortest decimal that reads back to the same `f32`, and reads it back exactly with its
+//! `float_roundtrip` feature (the tests run both). No saved value is infinite (a missing
+//! crossing limit is saved as `None`), so JSON, which has no infinity, can hold a snapshot.
+//!
+//! The whole [`DeformableWorld`](super::DeformableWorld) is the natural unit: one value holds
+//! both sides, rapier's bodies, colliders, joints, broad and narrow phases, islands and
+//! parameters, and every deformable, so one call saves everything a step reads:
+//!
+//! ```
+//! # #[cfg(feature = "serde")] {
+//! use sinew::dim3::{DeformableBuilder, DeformableWorld};
+//! use sinew::dim3::math::Vector;
+//! use sinew::dim3::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
+//!
+//! let mut world = DeformableWorld::new();
+//! world.physics.insert(RigidBodyBuilder::fixed(), ColliderBuilder::cuboid(5.0, 0.1, 5.0));
+//! let cube = DeformableBuilder::cuboid(Vector::splat(0.25), [3, 3, 3])
+//!     .translation(Vector::new(0.0, 0.5, 0.0))
+//!     .build()
+//!     .expect("a valid lattice");
+//! let cube = world.insert(cube);
+//! for _ in 0..5 {
+//!     world.step();
+//! }
+//! let bytes = bincode::serialize(&world).expect("serializable");
+//! let mut restored: DeformableWorld = bincode::deserialize(&bytes).expect("a valid snapshot");
+//! world.step();
+//! restored.step();
+//! assert_eq!(world.deformables[cube].positions(), restored.deformables[cube].positions());
+//! # }
+//! ```
+//!
+//! A [`DeformableSet`](super::DeformableSet) can be saved alone beside rapier's sets (handles
+//! keep their index and generation), but the continuation is exact only if everything the
+//! pipeline reads — bodies, colliders and rapier's broad phase — is restored with it.
+//!
+//! # What is saved, what is rebuilt
+//!
+//! Saved, per deformable: the rest mesh's nodes, cells and cell kind; the element model,
+//! material and stiffness form; node positions and velocities; the shape-based element's
+//! per-cell warm-start rotations; the element forces and stiffness/damping bounds of the last
+//! evaluation with the flag that says whether they are still current, and the crossing
+//! limiter; the contact material (coefficients, combine rules, collision groups); gravity
+//! scale; bindings to rigid bodies; contacts and touched colliders of the last step (they
+//! drive contact events and waking); frozen, sleep flag, still time and `can_sleep`; the
+//! last report; `user_data`. For the world also rapier's `PhysicsWorld` (as rapier serializes
+//! it), the pipeline's settings and last report, the simulated time and step count.
+//!
+//! Rebuilt on restore, by the code that built them first (so they come back bit for bit):
+//! the mesh's rest volumes and boundary (through [`Mesh::new`](super::Mesh::new), which also
+//! validates the snapshot's mesh), node masses, the element model's rest data and constant
+//! bounds (and, with `parallel`, its two-pass buffers), the node → binding index.
+//!
+//! Not saved: the pipeline's scratch buffers and each deformable's step-start copies of its
+//! state (filled at the start of every step before anything reads them), and rapier's own
+//! workspaces (`physics_pipeline`, `collision_pipeline`, `ccd_solver`: rapier skips them).
+//! Wall-clock timings in the reports are saved as they were, but never influence the physics.
+//!
+//! # Errors
+//!
+//! Deserializing never panics on bad input: truncated or garbled bytes are the format's
+//! error, and a snapshot that decodes but is inconsistent (a mesh that does not validate,
+//! a state array of the wrong length, non-finite node state, a binding to a node that does
+//! not exist, a material out of range) is a `serde` error naming what is wrong. Rapier's
+//! parts are checked only as far as rapier's own `Deserialize` checks them.
+//!
+//! # Versions
+//!
+//! A snapshot is tied to the version of sinew (and of rapier) that wrote it: the layout is
+//! the in-memory one, with no version tag and no migration. Restore it with the same
+//! versions, the same features and the same dimension; anything else may fail to decode or,
+//! worse, decode into a different state. Keep scene descriptions, not snapshots, for the
+//! long term.
+
+#[cfg(feature = "serde")]
+mod imp {
+    use std::borrow::Cow;
+
+    use serde::de::Error as _;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    use super::super::attach::Attachment;
+    use super::super::body::{check_state, lumped_masses, ContactPoint, Deformable};
+    use super::super::contact::ContactMaterial;
+    use super::super::material::{Material, Resolved, Stiffness};
+    use super::super::math::{Real, Rotation, Vector};
+    use super::super::mesh::{CellKind, Mesh};
+    use super::super::model::{Accumulator, ElementModel, ModelState};
+    use super::super::rapier::geometry::ColliderHandle;
+    use super::super::report::DeformableReport;
+
+    /// What a mesh is saved as: the inputs of [`Mesh::new`].
+    #[derive(Serialize, Deserialize)]
+    struct MeshData<'a> {
+        kind: CellKind,
+        nodes: Cow<'a, [Vector]>,
+        cells: Cow<'a, [u32]>,
+    }
+
+    impl Serialize for Mesh {
+        fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+            MeshData {
+                kind: self.kind(),
+                nodes: Cow::Borrowed(self.nodes()),
+                cells: Cow::Borrowed(self.cell_indices()),
+            }
+            .serialize(s)
+        }
+    }
+
+    impl<'de> Deserialize<'de> for Mesh {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            let m = MeshData::deserialize(d)?;
+            Mesh::new(m.nodes.into_owned(), m.cells.into_owned(), m.kind)
+                .map_err(|e| D::Error::custom(format_args!("invalid mesh in snapshot: {e}")))
+        }
+    }
+
+    /// What a deformable is saved as (see the module's docs).
+    #[derive(Serialize, Deserialize)]
+    struct DeformableData<'a> {
+        mesh: Cow<'a, Mesh>,
+        model: ElementModel,
+        material: Material,
+        stiffness: Stiffness,
+        positions: Cow<'a, [Vector]>,
+        velocities: Cow<'a, [Vector]>,
+        warm_start: Cow<'a, [Rotation]>,
+        acc: Cow<'a, Accumulator>,
+        forces_valid: bool,
+        /// The crossing limiter's bound; `None` for none (infinite), so that formats without
+        /// infinities (JSON) can hold it.
+        limiter: Option<Real>,
+        contact: ContactMaterial,
+        gravity_scale: Real,
+        frozen: bool,
+        report: Cow<'a, DeformableReport>,
+        attachments: Cow<'a, [Attachment]>,
+        contacts: Cow<'a, [ContactPoint]>,
+        touching: Cow<'a, [ColliderHandle]>,
+        can_sleep: bool,
+        sleeping: bool,
+        still_time: Real,
+        user_data: u128,
+    }
+
+    impl Serialize for Deformable {
+        fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+            DeformableData {
+                mesh: Cow::Borrowed(&self.mesh),
+                model: self.model,
+                material: self.params.material,
+                stiffness: self.params.stiffness,
+                positions: Cow::Borrowed(&self.positions),
+                velocities: Cow::Borrowed(&self.velocities),
+                warm_start: Cow::Borrowed(self.state.warm_start()),
+                acc: Cow::Borrowed(&self.acc),
+                forces_valid: self.forces_valid,
+                limiter: Some(self.limiter).filter(|l| l.is_finite()),
+                contact: self.contact,
+                gravity_scale: self.gravity_scale,
+                frozen: self.frozen,
+                report: Cow::Borrowed(&self.report),
+                attachments: Cow::Borrowed(&self.attachments),
+                contacts: Cow::Borrowed(&self.contacts),
+                touching: Cow::Borrowed(&self.touching),
+                can_sleep: self.can_sleep,
+                sleeping: self.sleeping,
+                still_time: self.still_time,
+                user_data: self.user_data,
+            }
+            .serialize(s)
+        }
+    }
+
+    impl<'de> Deserialize<'de> for Deformable {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            DeformableData::deserialize(d)?
+                .into_deformable()
+                .map_err(|e| D::Error::custom(format_args!("invalid deformable in snapshot: {e}")))
+        }
+    }
+
+    impl DeformableData<'_> {
+        fn into_deformable(self) -> Result<Deformable, String> {
+            let mesh = self.mesh.into_owned();
+            let n = mesh.nodes().len();
+            let params = Resolved::new(self.material, self.stiffness).map_err(|e| e.to_string())?;
+            check_state("positions", &self.positions, n).map_err(|e| e.to_string())?;
+            check_state("velocities", &self.velocities, n).map_err(|e| e.to_string())?;
+            let acc = self.acc.into_owned();
+            if acc.force.len() != n || acc.stiffness.len() != n || acc.damping.len() != n {
+                return Err(format!(
+                    "element force arrays are not one value per node ({n})"
+                ));
+            }
+            let (masses, inv_masses) = lumped_masses(&mesh, &params);
+            // The initial rotation only seeds the warm start, which the snapshot overwrites.
+            let mut state =
+                ModelState::build(self.model, &mesh, &masses, &params, Rotation::IDENTITY)
+                    .map_err(|e| e.to_string())?;
+            state.set_warm_start(&self.warm_start).map_err(|expected| {
+                format!(
+                    "{} warm-start rotations, expected {expected}",
+                    self.warm_start.len()
+                )
+            })?;
+            let c = &self.contact;
+            let coefficients_ok = c.friction.is_finite()
+                && c.friction >= 0.0
+                && (0.0..=1.0).contains(&c.restitution)
+                && self.gravity_scale.is_finite()
+                && self.still_time.is_finite();
+            if !coefficients_ok {
+                return Err(
+                    "friction, restitution, gravity scale or still time out of range".into(),
+                );
+            }
+            let attachments = self.attachments.into_owned();
+            let mut attachment_of = vec![u32::MAX; n];
+            for (k, a) in attachments.iter().enumerate() {
+                let slot = attachment_of
+                    .get_mut(a.node as usize)
+                    .ok_or_else(|| format!("binding of node {} of {n}", a.node))?;
+                if *slot != u32::MAX || !a.anchor.is_finite() {
+                    return Err(format!(
+                        "node {} bound twice or at a non-finite anchor",
+                        a.node
+                    ));
+                }
+                *slot = k as u32;
+            }
+            let positions = self.positions.into_owned();
+            let velocities = self.velocities.into_owned();
+            Ok(Deformable {
+                saved_positions: positions.clone(),
+                saved_velocities: velocities.clone(),
+                scratch_velocities: velocities.clone(),
+                mesh,
+                model: self.model,
+                params,
+                state,
+                positions,
+                velocities,
+                masses,
+                inv_masses,
+                acc,
+                forces_valid: self.forces_valid,
+                limiter: self.limiter.unwrap_or(Real::INFINITY),
+                contact: self.contact,
+                gravity_scale: self.gravity_scale,
+                frozen: self.frozen,
+                report: self.report.into_owned(),
+                attachments,
+                attachment_of,
+                contacts: self.contacts.into_owned(),
+                touching: self.touching.into_owned(),
+                can_sleep: self.can_sleep,
+                sleeping: self.sleeping,
+                still_time: self.still_time,
+                user_data: self.user_data,
+            })
+        }
+    }
+}
