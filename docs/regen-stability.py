@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Re-runs every command block of docs/STABILITY.md and puts its output in the block below it.
 
-    python3 docs/regen-stability.py            # all tables (about 20 minutes on 2 cores)
+    python3 docs/regen-stability.py            # all tables (about an hour: the 3D cantilever is 45 min)
     python3 docs/regen-stability.py crush limb # only the blocks whose command names a scene
+    python3 docs/regen-stability.py --no-fem   # skip the rapier-FEM blocks (rapier alone)
 
 A command block is a ```text block whose only line starts with `cargo run`; the ```text block
 right after it holds the table that command prints (stdout). The prose around the tables is not
@@ -19,7 +20,8 @@ BLOCK = re.compile(r"```text\n(cargo run[^\n]*)\n```\n(\s*)```text\n(.*?)```", r
 
 
 def main() -> int:
-    only = sys.argv[1:]
+    only = [a for a in sys.argv[1:] if not a.startswith("--")]
+    no_fem = "--no-fem" in sys.argv[1:]
     text = DOC.read_text()
     out = []
     last = 0
@@ -27,7 +29,7 @@ def main() -> int:
         command, gap, table = m.group(1), m.group(2), m.group(3)
         words = command.split()
         scene = words[words.index("--") + 1] if "--" in words else ""
-        if only and scene not in only:
+        if (only and scene not in only) or (no_fem and "fem" in words):
             continue
         print(f"== {command}", file=sys.stderr, flush=True)
         run = subprocess.run(command, shell=True, capture_output=True, text=True,
