@@ -46,13 +46,7 @@ fn xyz(p: Vector) -> String {
 
 /// The origin and the unit vectors: one positive simplex.
 fn simplex_nodes() -> Vec<Vector> {
-    let mut nodes = vec![Vector::ZERO];
-    for d in 0..DIM {
-        let mut e = Vector::ZERO;
-        e[d] = 1.0;
-        nodes.push(e);
-    }
-    nodes
+    super::support::unit_simplex().nodes().to_vec()
 }
 
 const SIMPLEX_GMSH: u32 = if DIM == 2 { 2 } else { 4 };
