@@ -8,6 +8,7 @@ mod elements;
 mod errors;
 mod fall;
 mod faults;
+mod golden;
 mod io;
 mod io_props;
 mod mesh;
