@@ -54,8 +54,8 @@ const SETTLE_STEPS: usize = 20;
 macro_rules! bench_dimension {
     ($c:expr, $dim:ident, $label:expr) => {{
         use sinew::$dim::mesh::CellKind;
-        use sinew::$dim::scenes::{FallScene, Subject};
         use sinew::$dim::DeformableWorld;
+        use sinew_scenes::$dim::{FallScene, Subject};
         let resolutions = resolutions();
         // Cells of the lattice at `res` (the scene's mesh, without building a world).
         let elements = |res: usize| -> u64 {

@@ -20,9 +20,9 @@ use clap::Parser;
 use plotters::prelude::*;
 use serde_json::json;
 use sinew::dim3::math::{Real, Vector};
-use sinew::dim3::scenes::metrics::{trajectory_error, uniaxial_volume_change};
-use sinew::dim3::scenes::{CantileverScene, CrushScene, FallScene, RotationErrorScene, Subject};
 use sinew::dim3::{ElementModel, RotationFit, ShapeDamping};
+use sinew_scenes::dim3::metrics::{trajectory_error, uniaxial_volume_change};
+use sinew_scenes::dim3::{CantileverScene, CrushScene, FallScene, RotationErrorScene, Subject};
 
 #[derive(Parser, Debug)]
 #[command(about = "Charts cost against error for every model")]
@@ -145,7 +145,7 @@ fn fall(quick: bool) -> Vec<Point> {
     let every: Real = 0.01;
     let mut out = Vec::new();
     for subject in Subject::all() {
-        let run = |res: usize, dt: Real| -> (sinew::record::Record, Vec<Vector>) {
+        let run = |res: usize, dt: Real| -> (sinew_scenes::record::Record, Vec<Vector>) {
             let scene = FallScene {
                 subject,
                 resolution: res,

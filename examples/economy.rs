@@ -16,8 +16,8 @@ use std::time::Instant;
 
 use clap::Parser;
 use sinew::dim3::math::Real;
-use sinew::dim3::scenes::{CrushScene, FallScene, Subject};
 use sinew::dim3::RotationFit;
+use sinew_scenes::dim3::{CrushScene, FallScene, Subject};
 
 #[derive(Parser, Debug)]
 struct Args {

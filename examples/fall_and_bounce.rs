@@ -14,7 +14,7 @@ mod sink;
 
 macro_rules! run_dimension {
     ($dim:ident, $label:expr, $sink:expr, $files:expr) => {{
-        use sinew::$dim::scenes::FallScene;
+        use sinew_scenes::$dim::FallScene;
         use sinew::$dim::ElementModel;
         let base = FallScene {
             resolution: sink::arg("--res", 5),

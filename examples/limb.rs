@@ -15,7 +15,7 @@ mod sink;
 
 macro_rules! run_dimension {
     ($dim:ident, $label:expr, $sink:expr, $files:expr) => {{
-        use sinew::$dim::scenes::LimbScene;
+        use sinew_scenes::$dim::LimbScene;
         use sinew::$dim::ElementModel;
         let base = LimbScene {
             spacing: sink::arg("--spacing", 0.1),

@@ -83,11 +83,11 @@ impl Soak {
 macro_rules! soak_dim {
     ($dim:ident, $n:expr, $args:expr) => {{
         use sinew::$dim::math::Real;
-        use sinew::$dim::scenes::{
+        use sinew::$dim::{DeformableWorld, RotationFit};
+        use sinew_scenes::$dim::{
             CantileverScene, CrushScene, FallScene, LimbScene, ManipulatorScene,
             RotationErrorScene, Subject,
         };
-        use sinew::$dim::{DeformableWorld, RotationFit};
 
         fn observe(out: &mut Soak, world: &DeformableWorld, fraction: f64) {
             let Some((_, r)) = world.report().deformables.first() else {

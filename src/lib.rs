@@ -54,12 +54,10 @@
 // `src/shared/` is mounted twice on purpose, once per dimension (DESIGN.md §2).
 #![allow(clippy::duplicate_mod)]
 
-pub mod beam;
 #[cfg(feature = "dim2")]
 pub mod dim2;
 #[cfg(feature = "dim3")]
 pub mod dim3;
-pub mod record;
 
 // The README's example is compiled and run as a doctest.
 #[cfg(all(doctest, feature = "dim3"))]

@@ -2,6 +2,8 @@
 //! figures.
 
 pub use sinew::dim2 as dim;
+/// The scene harness in the same dimension.
+pub use sinew_scenes::dim2 as scenes;
 
 /// A revolute joint about the axis normal to the x-y plane (dimension-specific constructor).
 pub fn planar_revolute() -> sinew::dim2::rapier::dynamics::RevoluteJointBuilder {

@@ -48,7 +48,7 @@ macro_rules! fall_to_rrd {
     ($name:ident, $dim:ident, $label:expr, $component:expr) => {
         #[test]
         fn $name() {
-            use sinew::$dim::scenes::FallScene;
+            use sinew_scenes::$dim::FallScene;
             use sinew::$dim::{ElementModel, RecorderOptions, RerunRecorder};
             let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rerun");
             let rrd = dir.join(format!("fall-{}.rrd", $label));

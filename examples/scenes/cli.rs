@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 use clap::{Parser, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::{json, Value};
-use sinew::record::Record;
+use sinew_scenes::record::Record;
 
 /// The scenes.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -42,7 +42,7 @@ pub struct Args {
     pub dim: Vec<u8>,
     /// Models (default: all): springs, centroid-springs, nonlinear-springs, edge-repulsion,
     /// shape-matching, rapier-volume, rapier-corotational, rapier-neo-hookean (and
-    /// rapier-fem-* with the `fem` feature); `sinew` or `rapier` for each family.
+    /// rapier-fem-* with `--features sinew-scenes/fem`); `sinew` or `rapier` for each family.
     #[arg(long, num_args = 1..)]
     pub model: Vec<String>,
     /// Rotation fits of shape-matching: 1, 2, 3 or polar (default: 2).
@@ -319,13 +319,13 @@ macro_rules! dimension_runner {
     ($module:ident, $dim:ident) => {
         mod $module {
             use super::{Args, Progress, Scene};
-            use sinew::record::Record;
             use sinew::$dim::math::Real;
-            use sinew::$dim::scenes::{
+            use sinew::$dim::{DeformableWorld, ElementModel, RotationFit};
+            use sinew_scenes::record::Record;
+            use sinew_scenes::$dim::{
                 dt_sweep, CantileverScene, CrushScene, FallScene, LimbScene, ManipulatorScene,
                 RapierModel, RotationErrorScene, Subject, CRUSH_MASSES,
             };
-            use sinew::$dim::{DeformableWorld, ElementModel, RotationFit};
 
             fn fits(args: &Args) -> Result<Vec<RotationFit>, String> {
                 if args.iterations.is_empty() {

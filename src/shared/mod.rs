@@ -19,7 +19,6 @@ mod pipeline;
 #[path = "rerun.rs"]
 mod recorder;
 mod report;
-pub mod scenes;
 mod set;
 pub mod snapshot;
 mod world;

@@ -1,8 +1,8 @@
 //! The cantilever at res 9 (issue 6, acceptance 4), in 2D: a clamped beam's static sag
 //! against Euler–Bernoulli for the material's Young's modulus.
 
-use sinew::dim2::scenes::{CantileverScene, Subject, SETTLED_WOBBLE};
 use sinew::dim2::ElementModel;
+use sinew_scenes::dim2::{CantileverScene, Subject, SETTLED_WOBBLE};
 
 /// The material mapping from Young's modulus gives a sag within 15 % of beam theory for at
 /// least one of sinew's models at res 9 (nodes across the thickness), on the default beam.

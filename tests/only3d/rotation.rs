@@ -2,8 +2,8 @@
 //! the spurious angular acceleration falls with more iterations and with a smaller dt, and
 //! the polar fit's is at the float-noise floor every fit shares.
 
-use sinew::dim3::scenes::RotationErrorScene;
 use sinew::dim3::RotationFit;
+use sinew_scenes::dim3::RotationErrorScene;
 
 #[test]
 fn rotation_error_falls_with_iterations_and_smaller_dt() {

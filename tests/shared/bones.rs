@@ -2,8 +2,8 @@
 
 use crate::dim::math::{self, Pose, Real, Vector, DIM, UP};
 use crate::dim::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
-use crate::dim::scenes::LimbScene;
 use crate::dim::{AttachError, DeformableBuilder, DeformableWorld, ElementModel, Material};
+use crate::scenes::LimbScene;
 
 fn cuboid(half: Vector) -> ColliderBuilder {
     ColliderBuilder::new(crate::dim::rapier::geometry::SharedShape::new(

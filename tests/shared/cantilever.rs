@@ -1,8 +1,8 @@
 //! The cantilever: a clamped beam's static sag against Euler–Bernoulli (issue 6, acceptance 4).
 
 use crate::dim::math::Real;
-use crate::dim::scenes::CantileverScene;
 use crate::dim::BuildError;
+use crate::scenes::CantileverScene;
 
 #[test]
 fn scene_theory_is_the_closed_form_for_a_rectangle() {

@@ -1,7 +1,7 @@
 //! Fall and bounce, every model (issue 2, acceptance 4).
 
-use crate::dim::scenes::FallScene;
 use crate::dim::ElementModel;
+use crate::scenes::FallScene;
 
 fn check(model: ElementModel) {
     // 8 s: a bounce can tip a body over (the 2D shape-matching square tumbles at its second

@@ -206,11 +206,6 @@ fn expected(pair: (u64, u64)) -> u64 {
     }
 }
 
-#[cfg(all(
-    target_arch = "x86_64",
-    not(feature = "parallel"),
-    not(feature = "enhanced-determinism")
-))]
 #[test]
 fn the_state_after_hundreds_of_steps_matches_the_recorded_hash() {
     let stack = golden_hash(&run_stack(240));

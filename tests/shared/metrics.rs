@@ -2,9 +2,7 @@
 
 use crate::dim::math::{self, Real, Vector, DIM};
 use crate::dim::mesh::{CellKind, Mesh};
-use crate::dim::scenes::metrics::{
-    shape_error, trajectory_error, uniaxial_volume_change, volume_ratio,
-};
+use crate::scenes::metrics::{shape_error, trajectory_error, uniaxial_volume_change, volume_ratio};
 
 fn lattice() -> Mesh {
     Mesh::cuboid(Vector::splat(0.5), [3; DIM], CellKind::Simplex).unwrap()

@@ -8,6 +8,12 @@ mod elements;
 mod errors;
 mod fall;
 mod faults;
+// The recorded hashes hold for this platform's arithmetic in a default build.
+#[cfg(all(
+    target_arch = "x86_64",
+    not(feature = "parallel"),
+    not(feature = "enhanced-determinism")
+))]
 mod golden;
 mod io;
 mod io_props;

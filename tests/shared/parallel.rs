@@ -5,8 +5,8 @@
 
 use crate::dim::math::{Real, DIM};
 use crate::dim::model::PARALLEL_MIN_WORK;
-use crate::dim::scenes::FallScene;
 use crate::dim::ElementModel;
+use crate::scenes::FallScene;
 
 /// Positions and velocities after `steps` steps of the fall scene, run inside a rayon pool of
 /// `threads` threads.

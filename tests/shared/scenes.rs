@@ -1,8 +1,8 @@
 //! The stability suite's scenes with the outcomes issue 5 asks of them (the limb's are in
 //! `bones.rs`).
 
-use crate::dim::scenes::{CrushScene, FallScene};
 use crate::dim::ElementModel;
+use crate::scenes::{CrushScene, FallScene};
 
 #[test]
 fn edge_repulsion_survives_a_1000_kg_crush_and_recovers() {

@@ -1,10 +1,12 @@
 //! What a scene simulates: one of sinew's element models, or one of rapier's own soft-body
 //! models built on the same mesh, masses and material.
 
-use super::super::material::Material;
-use super::super::math::{Real, Vector};
-use super::super::model::{ElementModel, RotationFit, ShapeDamping};
-use super::super::rapier::dynamics::{SoftBodyCellModel, SoftBodyMaterial, SpringCoefficients};
+use super::super::lib::math::{Real, Vector};
+use super::super::lib::model::{ElementModel, RotationFit, ShapeDamping};
+use super::super::lib::rapier::dynamics::{
+    SoftBodyCellModel, SoftBodyMaterial, SpringCoefficients,
+};
+use super::super::lib::Material;
 
 /// A model of rapier 0.36's soft bodies (`rapier::dynamics::SoftBody`), the peers sinew is
 /// measured against.
@@ -70,8 +72,8 @@ impl RapierModel {
     }
 
     #[cfg(feature = "fem")]
-    pub(crate) fn solver(&self) -> super::super::rapier::dynamics::SoftBodySolver {
-        use super::super::rapier::dynamics::SoftBodySolver;
+    pub(crate) fn solver(&self) -> super::super::lib::rapier::dynamics::SoftBodySolver {
+        use super::super::lib::rapier::dynamics::SoftBodySolver;
         match self {
             RapierModel::FemCorotational | RapierModel::FemNeoHookean => SoftBodySolver::Fem,
             _ => SoftBodySolver::Constraints,

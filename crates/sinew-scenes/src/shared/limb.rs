@@ -1,13 +1,13 @@
 //! Cooper & Maddock's limb (§5).
 
-use super::super::error::BuildError;
-use super::super::material::Material;
-use super::super::math::{self, Pose, Real, Vector, DIM};
-use super::super::mesh::{CellKind, Mesh};
-use super::super::model::ElementModel;
-use super::super::rapier::dynamics::{RigidBodyBuilder, RigidBodyHandle};
-use super::super::rapier::geometry::ColliderBuilder;
-use super::super::world::DeformableWorld;
+use super::super::lib::math::{self, Pose, Real, Vector, DIM};
+use super::super::lib::mesh::{CellKind, Mesh};
+use super::super::lib::model::ElementModel;
+use super::super::lib::rapier::dynamics::{RigidBodyBuilder, RigidBodyHandle};
+use super::super::lib::rapier::geometry::ColliderBuilder;
+use super::super::lib::BuildError;
+use super::super::lib::DeformableWorld;
+use super::super::lib::Material;
 use super::fall::cuboid;
 use super::sim::{BodySpec, Sim};
 use super::subject::Subject;

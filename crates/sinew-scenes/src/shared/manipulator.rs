@@ -1,10 +1,10 @@
 //! The `manipulator` scene (shape-based elasticity paper, §3.5).
 
-use super::super::error::BuildError;
-use super::super::math::{Real, Vector, UP};
-use super::super::rapier::dynamics::RigidBodyBuilder;
-use super::super::rapier::geometry::ColliderBuilder;
-use super::super::world::DeformableWorld;
+use super::super::lib::math::{Real, Vector, UP};
+use super::super::lib::rapier::dynamics::RigidBodyBuilder;
+use super::super::lib::rapier::geometry::ColliderBuilder;
+use super::super::lib::BuildError;
+use super::super::lib::DeformableWorld;
 use super::fall::{cuboid, FallScene};
 use super::sim::RAPIER_SKIN;
 use super::Record;

@@ -3,16 +3,16 @@
 
 use std::time::Instant;
 
-use super::super::attach::AttachError;
-use super::super::body::DeformableBuilder;
-use super::super::error::BuildError;
-use super::super::material::{Material, Stiffness};
-use super::super::math::{Real, Rotation, Vector, DIM, SIMPLEX_ARITY, UP};
-use super::super::mesh::{CellKind, Mesh};
-use super::super::rapier::dynamics::{RigidBodyHandle, SoftBodyBuilder, SoftBodyHandle};
-use super::super::rapier::geometry::ColliderBuilder;
-use super::super::set::DeformableHandle;
-use super::super::world::DeformableWorld;
+use super::super::lib::math::{Real, Rotation, Vector, DIM, SIMPLEX_ARITY, UP};
+use super::super::lib::mesh::{CellKind, Mesh};
+use super::super::lib::rapier::dynamics::{RigidBodyHandle, SoftBodyBuilder, SoftBodyHandle};
+use super::super::lib::rapier::geometry::ColliderBuilder;
+use super::super::lib::AttachError;
+use super::super::lib::BuildError;
+use super::super::lib::DeformableBuilder;
+use super::super::lib::DeformableHandle;
+use super::super::lib::DeformableWorld;
+use super::super::lib::{Material, Stiffness};
 use super::subject::{mean_edge, Subject};
 use crate::record::{Record, EXPLODED_DISTANCE, EXPLODED_SPEED};
 
@@ -336,7 +336,7 @@ impl Sim {
     }
 
     /// sinew's body, when the subject is one of sinew's models.
-    pub fn deformable(&self) -> Option<&super::super::body::Deformable> {
+    pub fn deformable(&self) -> Option<&super::super::lib::Deformable> {
         match self.soft {
             Soft::Sinew(h) => self.world.deformables.get(h),
             Soft::Rapier(_) => None,

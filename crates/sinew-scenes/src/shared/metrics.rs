@@ -8,8 +8,8 @@
 //! | volume error under static load | [`volume_ratio`], [`uniaxial_volume_change`] | `crush` (hold) |
 //! | spurious rotation | [`super::spurious_acceleration`] | `rotation-error` |
 
-use super::super::math::{self, Real, Vector};
-use super::super::mesh::{cell_volume, Mesh};
+use super::super::lib::math::{self, Real, Vector};
+use super::super::lib::mesh::{cell_volume, Mesh};
 
 /// Root-mean-square distance between two trajectories sampled at the same instants, over
 /// `size` (so 0.01 is 1 % of the body). Compares the common prefix when one is shorter (a run

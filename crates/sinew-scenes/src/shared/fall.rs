@@ -1,13 +1,13 @@
 //! The `fall` scene and the `dt-sweep` built on it.
 
-use super::super::error::BuildError;
-use super::super::material::Material;
-use super::super::math::{Real, Vector, DIM, UP};
-use super::super::mesh::{CellKind, Mesh};
-use super::super::model::ElementModel;
-use super::super::rapier::dynamics::RigidBodyBuilder;
-use super::super::rapier::geometry::{ColliderBuilder, Cuboid, SharedShape};
-use super::super::world::DeformableWorld;
+use super::super::lib::math::{Real, Vector, DIM, UP};
+use super::super::lib::mesh::{CellKind, Mesh};
+use super::super::lib::model::ElementModel;
+use super::super::lib::rapier::dynamics::RigidBodyBuilder;
+use super::super::lib::rapier::geometry::{ColliderBuilder, Cuboid, SharedShape};
+use super::super::lib::BuildError;
+use super::super::lib::DeformableWorld;
+use super::super::lib::Material;
 use super::sim::{BodySpec, Sim};
 use super::subject::Subject;
 use super::Record;

@@ -1,11 +1,11 @@
 //! The `rotation-error` scene (shape-based elasticity paper, §4, Table 1).
 
-use super::super::error::BuildError;
-use super::super::material::{Material, Stiffness};
-use super::super::math::{self, Real, Vector, DIM, UP};
-use super::super::mesh::{CellKind, Mesh};
-use super::super::model::{ElementModel, RotationFit, ShapeDamping};
-use super::super::world::DeformableWorld;
+use super::super::lib::math::{self, Real, Vector, DIM, UP};
+use super::super::lib::mesh::{CellKind, Mesh};
+use super::super::lib::model::{ElementModel, RotationFit, ShapeDamping};
+use super::super::lib::BuildError;
+use super::super::lib::DeformableWorld;
+use super::super::lib::{Material, Stiffness};
 use super::fall::ground;
 use super::sim::{BodySpec, Sim};
 use super::subject::Subject;

@@ -1,10 +1,10 @@
 //! The `crush` scene.
 
-use super::super::error::BuildError;
-use super::super::math::{Real, Vector, DIM, UP};
-use super::super::rapier::dynamics::{LockedAxes, RigidBodyBuilder, RigidBodyType};
-use super::super::rapier::geometry::ColliderBuilder;
-use super::super::world::DeformableWorld;
+use super::super::lib::math::{Real, Vector, DIM, UP};
+use super::super::lib::rapier::dynamics::{LockedAxes, RigidBodyBuilder, RigidBodyType};
+use super::super::lib::rapier::geometry::ColliderBuilder;
+use super::super::lib::BuildError;
+use super::super::lib::DeformableWorld;
 use super::fall::{cuboid, set_first_failure, FallScene};
 use super::metrics::volume_ratio;
 use super::sim::RAPIER_SKIN;

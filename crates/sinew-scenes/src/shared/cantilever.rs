@@ -1,14 +1,14 @@
 //! The `cantilever` scene: the static sag of a clamped beam under its own weight, against
 //! Euler–Bernoulli beam theory ([`crate::beam`]) for the material's Young's modulus.
 
-use super::super::error::BuildError;
-use super::super::material::Material;
-use super::super::math::{Real, Vector, DIM, UP};
-use super::super::mesh::{CellKind, Mesh};
-use super::super::model::ElementModel;
-use super::super::rapier::dynamics::RigidBodyBuilder;
-use super::super::rapier::geometry::ColliderBuilder;
-use super::super::world::DeformableWorld;
+use super::super::lib::math::{Real, Vector, DIM, UP};
+use super::super::lib::mesh::{CellKind, Mesh};
+use super::super::lib::model::ElementModel;
+use super::super::lib::rapier::dynamics::RigidBodyBuilder;
+use super::super::lib::rapier::geometry::ColliderBuilder;
+use super::super::lib::BuildError;
+use super::super::lib::DeformableWorld;
+use super::super::lib::Material;
 use super::fall::cuboid;
 use super::sim::{BodySpec, Sim};
 use super::subject::Subject;
