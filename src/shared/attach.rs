@@ -1,4 +1,5 @@
-//! Nodes bound to rigid bodies ("bones").
+//! Nodes bound to rigid bodies ("bones"): the bindings and the bone drive
+//! (`docs/ARCHITECTURE.md` §7).
 //!
 //! A node is bound to a rigid body at a local anchor (its position in the body's frame when it
 //! was attached). Every substep:
@@ -13,10 +14,10 @@
 //! Bound nodes take no part in contacts. A binding to a body that has been removed from the
 //! rigid-body set is dropped at the next step (the step report counts it).
 
-use super::body::Deformable;
+use super::coupling::{self, MotionKind, Substep};
 use super::math::{Real, Vector};
 use super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
-use super::rapier::geometry::{ColliderHandle, ColliderSet};
+use super::rapier::geometry::{Collider, ColliderHandle};
 
 /// A node bound to a rigid body.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -59,121 +60,209 @@ pub enum AttachError {
     BadTolerance(Real),
 }
 
-impl Deformable {
-    /// The current bindings, in the order they were made.
-    pub fn attachments(&self) -> &[Attachment] {
-        &self.attachments
+/// Fraction of a dynamically bound node's position error corrected per substep.
+const DYNAMIC_BINDING_CORRECTION: Real = 0.2;
+
+/// A deformable's bindings: the list, in the order they were made, and per node its binding.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Bindings {
+    list: Vec<Attachment>,
+    /// Per node: index into `list`.
+    of_node: Vec<Option<u32>>,
+}
+
+impl Bindings {
+    /// No bindings on a body of `nodes` nodes.
+    pub fn new(nodes: usize) -> Self {
+        Bindings {
+            list: Vec::new(),
+            of_node: vec![None; nodes],
+        }
     }
 
-    /// Whether a node is bound to a body.
-    pub fn is_attached(&self, node: u32) -> bool {
-        self.attachment_of
-            .get(node as usize)
-            .is_some_and(|a| *a != u32::MAX)
+    /// The bindings of `list` on a body of `nodes` nodes; `Err` names a node bound twice, out
+    /// of range, or bound at a non-finite anchor.
+    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
+    pub fn from_list(list: Vec<Attachment>, nodes: usize) -> Result<Self, String> {
+        let mut of_node = vec![None; nodes];
+        for (k, a) in list.iter().enumerate() {
+            let slot = of_node
+                .get_mut(a.node as usize)
+                .ok_or_else(|| format!("binding of node {} of {nodes}", a.node))?;
+            if slot.is_some() || !a.anchor.is_finite() {
+                return Err(format!(
+                    "node {} bound twice or at a non-finite anchor",
+                    a.node
+                ));
+            }
+            *slot = Some(k as u32);
+        }
+        Ok(Bindings { list, of_node })
     }
 
-    /// Binds `nodes` to `body` at their current positions (re-binding nodes already bound
-    /// elsewhere). Returns how many nodes were bound. Nothing changes on error.
-    pub fn attach_nodes(
+    /// The bindings, in the order they were made.
+    pub fn list(&self) -> &[Attachment] {
+        &self.list
+    }
+
+    /// Number of bound nodes.
+    pub fn len(&self) -> usize {
+        self.list.len()
+    }
+
+    /// Whether a node is bound.
+    pub fn is_bound(&self, node: u32) -> bool {
+        self.of_node.get(node as usize).is_some_and(|a| a.is_some())
+    }
+
+    /// The bodies nodes are bound to, each once, in the order of their first binding.
+    pub fn bodies(&self, out: &mut Vec<RigidBodyHandle>) {
+        out.clear();
+        for a in &self.list {
+            if !out.contains(&a.body) {
+                out.push(a.body);
+            }
+        }
+    }
+
+    /// Binds `nodes` (all in range) at their `positions` to `body`, whose pose is `pose`,
+    /// re-binding nodes bound elsewhere.
+    pub fn bind(
         &mut self,
-        bodies: &RigidBodySet,
         body: RigidBodyHandle,
+        pose: &super::math::Pose,
+        positions: &[Vector],
         nodes: &[u32],
-    ) -> Result<usize, AttachError> {
-        let rb = bodies.get(body).ok_or(AttachError::NoSuchBody(body))?;
-        if let Some(&node) = nodes.iter().find(|&&n| n as usize >= self.positions.len()) {
-            return Err(AttachError::NodeOutOfRange {
-                node,
-                nodes: self.positions.len(),
-            });
-        }
-        let pose = *rb.position();
-        self.detach_nodes(nodes);
+    ) {
+        self.unbind(nodes);
         for &node in nodes {
-            let anchor = pose.inverse_transform_point(self.positions[node as usize]);
-            self.attachments.push(Attachment { node, body, anchor });
+            let anchor = pose.inverse_transform_point(positions[node as usize]);
+            self.list.push(Attachment { node, body, anchor });
         }
-        self.reindex_attachments();
-        Ok(nodes.len())
-    }
-
-    /// Binds every node inside `collider`, or within `tolerance` of it, to the collider's
-    /// parent body — how tissue is skinned onto a bone. Returns how many nodes were bound.
-    pub fn attach_nodes_inside(
-        &mut self,
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
-        collider: ColliderHandle,
-        tolerance: Real,
-    ) -> Result<usize, AttachError> {
-        if !(tolerance.is_finite() && tolerance >= 0.0) {
-            return Err(AttachError::BadTolerance(tolerance));
-        }
-        let co = colliders
-            .get(collider)
-            .ok_or(AttachError::NoSuchCollider(collider))?;
-        let body = co
-            .parent()
-            .ok_or(AttachError::ColliderWithoutBody(collider))?;
-        let pose = co.position();
-        let nodes: Vec<u32> = (0..self.positions.len() as u32)
-            .filter(|&i| {
-                co.shape()
-                    .distance_to_point(pose, self.positions[i as usize], true)
-                    <= tolerance
-            })
-            .collect();
-        self.attach_nodes(bodies, body, &nodes)
+        self.reindex();
     }
 
     /// Unbinds the given nodes (those not bound are ignored). Returns how many were unbound.
-    pub fn detach_nodes(&mut self, nodes: &[u32]) -> usize {
-        let before = self.attachments.len();
+    pub fn unbind(&mut self, nodes: &[u32]) -> usize {
+        let before = self.list.len();
         if nodes.is_empty() || before == 0 {
             return 0;
         }
-        let mut drop = vec![false; self.positions.len()];
+        let mut drop = vec![false; self.of_node.len()];
         for &n in nodes {
             if let Some(d) = drop.get_mut(n as usize) {
                 *d = true;
             }
         }
-        self.attachments.retain(|a| !drop[a.node as usize]);
-        self.reindex_attachments();
-        before - self.attachments.len()
+        self.list.retain(|a| !drop[a.node as usize]);
+        self.reindex();
+        before - self.list.len()
     }
 
-    /// Unbinds every node bound to `body`. Returns how many were unbound.
-    pub fn detach_body(&mut self, body: RigidBodyHandle) -> usize {
-        let before = self.attachments.len();
-        self.attachments.retain(|a| a.body != body);
-        self.reindex_attachments();
-        before - self.attachments.len()
-    }
-
-    /// Unbinds every node.
-    pub fn detach_all(&mut self) {
-        self.attachments.clear();
-        self.reindex_attachments();
-    }
-
-    /// Drops bindings to bodies no longer in the set; returns how many.
-    pub(crate) fn prune_attachments(&mut self, bodies: &RigidBodySet) -> usize {
-        let before = self.attachments.len();
-        self.attachments.retain(|a| bodies.contains(a.body));
-        if self.attachments.len() != before {
-            self.reindex_attachments();
+    /// Keeps the bindings for which `keep` holds; returns how many were dropped.
+    pub fn retain(&mut self, keep: impl FnMut(&Attachment) -> bool) -> usize {
+        let before = self.list.len();
+        self.list.retain(keep);
+        if self.list.len() != before {
+            self.reindex();
         }
-        before - self.attachments.len()
+        before - self.list.len()
     }
 
-    pub(crate) fn reindex_attachments(&mut self) {
-        self.attachment_of.clear();
-        self.attachment_of.resize(self.positions.len(), u32::MAX);
-        for (k, a) in self.attachments.iter().enumerate() {
-            self.attachment_of[a.node as usize] = k as u32;
+    fn reindex(&mut self) {
+        let n = self.of_node.len();
+        self.of_node.clear();
+        self.of_node.resize(n, None);
+        for (k, a) in self.list.iter().enumerate() {
+            self.of_node[a.node as usize] = Some(k as u32);
         }
-        self.forces_valid = false;
-        self.wake_up();
+    }
+}
+
+/// The nodes whose `positions` are inside `collider`, or within `tolerance` of it.
+pub(crate) fn nodes_inside(collider: &Collider, positions: &[Vector], tolerance: Real) -> Vec<u32> {
+    let pose = collider.position();
+    (0..positions.len() as u32)
+        .filter(|&i| {
+            collider
+                .shape()
+                .distance_to_point(pose, positions[i as usize], true)
+                <= tolerance
+        })
+        .collect()
+}
+
+/// A body's node arrays as the bone drive sees them.
+pub(crate) struct DrivenNodes<'a> {
+    pub positions: &'a [Vector],
+    pub velocities: &'a mut [Vector],
+    pub inv_masses: &'a [Real],
+}
+
+/// The bone drive, once per substep after the velocity update and before contacts: every
+/// bound node gets the velocity that takes it to its anchor at the end of the substep. On a
+/// fixed or kinematic body the node's end position is that target (`targets[k]`, set after
+/// the positions move); on a dynamic body the binding is two-way, at the velocity level (see
+/// the module docs), and its target is `None`. `motion_of[k]` indexes the motion of binding
+/// `k`'s body in `at.motions` (`None`: the body is gone).
+pub(crate) fn drive_bones(
+    bindings: &Bindings,
+    motion_of: &[Option<usize>],
+    nodes: DrivenNodes<'_>,
+    at: &Substep<'_>,
+    bodies: &mut RigidBodySet,
+    targets: &mut Vec<Option<Vector>>,
+) {
+    let (h, s1, dt, t) = (at.h, at.s1, at.dt, at.t);
+    targets.clear();
+    for (k, a) in bindings.list.iter().enumerate() {
+        let Some(m) = motion_of[k] else {
+            targets.push(None);
+            continue;
+        };
+        let motion = at.motions[m];
+        let i = a.node as usize;
+        let target = motion.pose_at(s1, dt, bodies).transform_point(a.anchor);
+        let desired = (target - nodes.positions[i]) / h;
+        if motion.kind == MotionKind::Dynamic {
+            let anchor_now = motion.pose_at(t / dt, dt, bodies).transform_point(a.anchor);
+            let Some(rb) = bodies.get_mut(a.body) else {
+                targets.push(None);
+                continue;
+            };
+            // Velocity-level binding: the anchor's velocity plus a fraction of the
+            // position error per substep (a full correction on a body whose joints
+            // rapier solves later feeds energy into the pair).
+            let v_anchor = rb.velocity_at_point(anchor_now);
+            let wanted =
+                v_anchor + (anchor_now - nodes.positions[i]) * (DYNAMIC_BINDING_CORRECTION / h);
+            let delta = wanted - nodes.velocities[i];
+            let len = delta.length();
+            if len > 0.0 {
+                let dir = delta / len;
+                let w_body = coupling::inv_mass_at(rb, target, dir);
+                let impulse = delta / (nodes.inv_masses[i] + w_body);
+                nodes.velocities[i] += impulse * nodes.inv_masses[i];
+                coupling::apply_impulse(rb, -impulse, target, false, 0.0);
+            }
+            targets.push(None);
+        } else {
+            nodes.velocities[i] = desired;
+            targets.push(Some(target));
+        }
+    }
+}
+
+/// After the positions moved: nodes on fixed or kinematic bones are put exactly on their
+/// targets.
+pub(crate) fn place_on_bones(
+    bindings: &Bindings,
+    targets: &[Option<Vector>],
+    positions: &mut [Vector],
+) {
+    for (a, target) in bindings.list.iter().zip(targets) {
+        if let Some(target) = target.filter(|t| t.is_finite()) {
+            positions[a.node as usize] = target;
+        }
     }
 }

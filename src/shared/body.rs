@@ -1,13 +1,14 @@
 //! A deformable body: rest mesh, element model and struct-of-arrays node state.
 
-use super::contact::ContactMaterial;
+use super::attach::{self, AttachError, Attachment, Bindings};
+use super::contact::{ContactMaterial, ContactPoint};
 use super::error::BuildError;
 use super::material::{Material, Resolved, Stiffness};
 use super::math::{self, AngVector, Real, Rotation, Vector, DIM};
 use super::mesh::{CellKind, Mesh};
 use super::model::{Accumulator, ElementModel, ModelState};
-use super::rapier::dynamics::CoefficientCombineRule;
-use super::rapier::geometry::InteractionGroups;
+use super::rapier::dynamics::{CoefficientCombineRule, RigidBodyHandle, RigidBodySet};
+use super::rapier::geometry::{ColliderHandle, ColliderSet, InteractionGroups};
 use super::report::DeformableReport;
 
 /// A deformable body.
@@ -36,13 +37,12 @@ pub struct Deformable {
     pub(crate) saved_positions: Vec<Vector>,
     pub(crate) saved_velocities: Vec<Vector>,
     pub(crate) scratch_velocities: Vec<Vector>,
-    pub(crate) attachments: Vec<super::attach::Attachment>,
-    /// Per node: index into `attachments`, or `u32::MAX`.
-    pub(crate) attachment_of: Vec<u32>,
+    /// Nodes bound to rigid bodies.
+    pub(crate) bindings: Bindings,
     /// Contacts of the last step (one per touching surface node, plus facet contacts).
     pub(crate) contacts: Vec<ContactPoint>,
     /// Colliders touched during the last step, sorted.
-    pub(crate) touching: Vec<super::rapier::geometry::ColliderHandle>,
+    pub(crate) touching: Vec<ColliderHandle>,
     /// Whether the body may fall asleep.
     pub(crate) can_sleep: bool,
     /// Whether the body is asleep (not simulated until something disturbs it).
@@ -61,7 +61,7 @@ impl Deformable {
         let mut state = self.state.clone();
         let mut acc = Accumulator::new(self.positions.len());
         let limiter = state.accumulate(&self.positions, &self.velocities, &mut acc);
-        super::pipeline::stable_substep(&self.masses, &acc.stiffness, &acc.damping).min(limiter)
+        super::model::stable_substep(&self.masses, &acc.stiffness, &acc.damping).min(limiter)
     }
 
     /// The rest mesh.
@@ -271,20 +271,96 @@ impl Deformable {
         self.wake_up();
         Ok(())
     }
-}
 
-/// A contact between a deformable and a collider.
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Copy, Clone, Debug, PartialEq)]
-pub struct ContactPoint {
-    /// Point on the collider's surface, world frame.
-    pub point: Vector,
-    /// The collider's outward normal there.
-    pub normal: Vector,
-    /// The collider.
-    pub collider: super::rapier::geometry::ColliderHandle,
-    /// The node, or `u32::MAX` for a facet contact.
-    pub node: u32,
+    /// The current bindings, in the order they were made.
+    pub fn attachments(&self) -> &[Attachment] {
+        self.bindings.list()
+    }
+
+    /// Whether a node is bound to a body.
+    pub fn is_attached(&self, node: u32) -> bool {
+        self.bindings.is_bound(node)
+    }
+
+    /// Binds `nodes` to `body` at their current positions (re-binding nodes already bound
+    /// elsewhere). Returns how many nodes were bound. Nothing changes on error.
+    pub fn attach_nodes(
+        &mut self,
+        bodies: &RigidBodySet,
+        body: RigidBodyHandle,
+        nodes: &[u32],
+    ) -> Result<usize, AttachError> {
+        let rb = bodies.get(body).ok_or(AttachError::NoSuchBody(body))?;
+        if let Some(&node) = nodes.iter().find(|&&n| n as usize >= self.positions.len()) {
+            return Err(AttachError::NodeOutOfRange {
+                node,
+                nodes: self.positions.len(),
+            });
+        }
+        self.bindings
+            .bind(body, rb.position(), &self.positions, nodes);
+        self.bindings_changed();
+        Ok(nodes.len())
+    }
+
+    /// Binds every node inside `collider`, or within `tolerance` of it, to the collider's
+    /// parent body — how tissue is skinned onto a bone. Returns how many nodes were bound.
+    pub fn attach_nodes_inside(
+        &mut self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        collider: ColliderHandle,
+        tolerance: Real,
+    ) -> Result<usize, AttachError> {
+        if !(tolerance.is_finite() && tolerance >= 0.0) {
+            return Err(AttachError::BadTolerance(tolerance));
+        }
+        let co = colliders
+            .get(collider)
+            .ok_or(AttachError::NoSuchCollider(collider))?;
+        let body = co
+            .parent()
+            .ok_or(AttachError::ColliderWithoutBody(collider))?;
+        let nodes = attach::nodes_inside(co, &self.positions, tolerance);
+        self.attach_nodes(bodies, body, &nodes)
+    }
+
+    /// Unbinds the given nodes (those not bound are ignored). Returns how many were unbound.
+    pub fn detach_nodes(&mut self, nodes: &[u32]) -> usize {
+        if nodes.is_empty() || self.bindings.len() == 0 {
+            return 0;
+        }
+        let dropped = self.bindings.unbind(nodes);
+        self.bindings_changed();
+        dropped
+    }
+
+    /// Unbinds every node bound to `body`. Returns how many were unbound.
+    pub fn detach_body(&mut self, body: RigidBodyHandle) -> usize {
+        let dropped = self.bindings.retain(|a| a.body != body);
+        self.bindings_changed();
+        dropped
+    }
+
+    /// Unbinds every node.
+    pub fn detach_all(&mut self) {
+        self.bindings.retain(|_| false);
+        self.bindings_changed();
+    }
+
+    /// Drops bindings to bodies no longer in the set; returns how many.
+    pub(crate) fn prune_attachments(&mut self, bodies: &RigidBodySet) -> usize {
+        let dropped = self.bindings.retain(|a| bodies.contains(a.body));
+        if dropped > 0 {
+            self.bindings_changed();
+        }
+        dropped
+    }
+
+    fn bindings_changed(&mut self) {
+        self.forces_valid = false;
+        self.wake_up();
+    }
 }
 
 pub(crate) fn check_state(
@@ -589,8 +665,7 @@ impl DeformableBuilder {
             saved_positions: positions.clone(),
             saved_velocities: vec![self.linvel; n],
             scratch_velocities: vec![self.linvel; n],
-            attachments: Vec::new(),
-            attachment_of: vec![u32::MAX; n],
+            bindings: Bindings::new(n),
             touching: Vec::new(),
             can_sleep: self.can_sleep,
             sleeping: false,

@@ -9,6 +9,7 @@ use super::{math, rapier};
 mod attach;
 mod body;
 mod contact;
+mod coupling;
 mod error;
 mod events;
 mod material;
@@ -24,14 +25,14 @@ pub mod snapshot;
 mod world;
 
 pub use attach::{AttachError, Attachment};
-pub use body::ContactPoint;
 pub use body::{Deformable, DeformableBuilder};
+pub use contact::ContactPoint;
 pub use error::BuildError;
 pub use events::{ChannelEventCollector, DeformableContactEvent, DeformableEventHandler};
 pub use material::{Material, Stiffness};
 pub use mesh::{CellKind, Mesh, MeshWarning};
 pub use model::{ElementModel, RotationFit, ShapeDamping};
-pub use pipeline::{DeformablePipeline, PipelineSettings};
+pub use pipeline::{DeformablePipeline, PipelineSettings, RigidSets};
 #[cfg(feature = "rerun")]
 pub use recorder::{ColorField, RecorderError, RecorderOptions, RerunRecorder};
 pub use report::{DeformableReport, StepReport};

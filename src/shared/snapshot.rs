@@ -87,9 +87,9 @@ mod imp {
     use serde::de::Error as _;
     use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-    use super::super::attach::Attachment;
-    use super::super::body::{check_state, lumped_masses, ContactPoint, Deformable};
-    use super::super::contact::ContactMaterial;
+    use super::super::attach::{Attachment, Bindings};
+    use super::super::body::{check_state, lumped_masses, Deformable};
+    use super::super::contact::{ContactMaterial, ContactPoint};
     use super::super::material::{Material, Resolved, Stiffness};
     use super::super::math::{Real, Rotation, Vector};
     use super::super::mesh::{CellKind, Mesh};
@@ -169,7 +169,7 @@ mod imp {
                 gravity_scale: self.gravity_scale,
                 frozen: self.frozen,
                 report: Cow::Borrowed(&self.report),
-                attachments: Cow::Borrowed(&self.attachments),
+                attachments: Cow::Borrowed(self.bindings.list()),
                 contacts: Cow::Borrowed(&self.contacts),
                 touching: Cow::Borrowed(&self.touching),
                 can_sleep: self.can_sleep,
@@ -224,20 +224,7 @@ mod imp {
                     "friction, restitution, gravity scale or still time out of range".into(),
                 );
             }
-            let attachments = self.attachments.into_owned();
-            let mut attachment_of = vec![u32::MAX; n];
-            for (k, a) in attachments.iter().enumerate() {
-                let slot = attachment_of
-                    .get_mut(a.node as usize)
-                    .ok_or_else(|| format!("binding of node {} of {n}", a.node))?;
-                if *slot != u32::MAX || !a.anchor.is_finite() {
-                    return Err(format!(
-                        "node {} bound twice or at a non-finite anchor",
-                        a.node
-                    ));
-                }
-                *slot = k as u32;
-            }
+            let bindings = Bindings::from_list(self.attachments.into_owned(), n)?;
             let positions = self.positions.into_owned();
             let velocities = self.velocities.into_owned();
             Ok(Deformable {
@@ -259,8 +246,7 @@ mod imp {
                 gravity_scale: self.gravity_scale,
                 frozen: self.frozen,
                 report: self.report.into_owned(),
-                attachments,
-                attachment_of,
+                bindings,
                 contacts: self.contacts.into_owned(),
                 touching: self.touching.into_owned(),
                 can_sleep: self.can_sleep,

@@ -6,7 +6,7 @@ use super::body::Deformable;
 use super::error::BuildError;
 use super::events::DeformableEventHandler;
 use super::math::Real;
-use super::pipeline::DeformablePipeline;
+use super::pipeline::{DeformablePipeline, RigidSets};
 use super::rapier::dynamics::{RigidBody, RigidBodyHandle};
 use super::rapier::geometry::ColliderHandle;
 use super::rapier::pipeline::PhysicsWorld;
@@ -154,9 +154,11 @@ impl DeformableWorld {
             w.gravity,
             &w.integration_parameters,
             &mut self.deformables,
-            &mut w.bodies,
-            &w.colliders,
-            &w.broad_phase,
+            RigidSets {
+                bodies: &mut w.bodies,
+                colliders: &w.colliders,
+                broad_phase: &w.broad_phase,
+            },
             events,
         );
         self.physics.step();

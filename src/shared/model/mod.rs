@@ -404,3 +404,23 @@ impl Elements {
 pub(crate) fn reduced_mass(a: Real, b: Real) -> Real {
     a * b / (a + b)
 }
+
+/// Largest stable symplectic-Euler substep for the given per-node bounds (the masses and the
+/// Gershgorin stiffness and damping bounds the force loops accumulate): the smallest over the
+/// nodes of `2/ω (√(1+ζ²) − ζ)`, `ω² = stiffness/m`, `ζ = damping / (2 √(stiffness · m))`.
+pub(crate) fn stable_substep(masses: &[Real], stiffness: &[Real], damping: &[Real]) -> Real {
+    let mut h = Real::INFINITY;
+    for ((m, s), d) in masses.iter().zip(stiffness).zip(damping) {
+        let hi = if *s > 0.0 {
+            let omega = (s / m).sqrt();
+            let zeta = d / (2.0 * (s * m).sqrt());
+            2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
+        } else if *d > 0.0 {
+            2.0 * m / d
+        } else {
+            continue;
+        };
+        h = h.min(hi);
+    }
+    h
+}

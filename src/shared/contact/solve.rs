@@ -1,0 +1,133 @@
+//! Contacts solved on velocities: one Gauss–Seidel update per contact found.
+
+use super::super::coupling::BodyMotion;
+use super::super::coupling::Substep;
+use super::super::math::{Real, Vector, FACET_ARITY};
+use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
+use super::candidates::Candidate;
+
+/// A contact between the deformable (a node, or a point of a surface facet) and a collider,
+/// solved on velocities.
+///
+/// Impulses on a dynamic body use the effective mass of both sides: `Σ w_j²/m_j` on the
+/// deformable, and the body's mass and inertia at the contact point. Each impulse is equal and
+/// opposite (momentum is conserved) and applied to the body at once, so later contacts see its
+/// new velocity: a light body is not launched by the whole momentum change of every node it
+/// touches. The normal impulse stays non-negative and reaches at most the target relative
+/// velocity (never more than the reverse of the approach: no energy is created); friction is
+/// Coulomb's, at most `μ` times the normal impulse, and no more than stops the slip.
+pub(crate) struct Contact {
+    pub candidate: usize,
+    /// Contact point, on the collider's end-of-substep pose.
+    pub point: Vector,
+    /// The same material point on a dynamic body's present pose (see [`Candidate::anchor`]):
+    /// the contact keeps it while later impulses move the predicted pose.
+    pub(super) anchor: Vector,
+    /// Unit normal from the collider towards the deformable.
+    pub normal: Vector,
+    /// The deformable's side: nodes, barycentric weights and inverse masses (zero for a node
+    /// held by a bone: its share goes to the bone).
+    pub(super) nodes: [u32; FACET_ARITY],
+    pub(super) weights: [Real; FACET_ARITY],
+    pub(super) inv_masses: [Real; FACET_ARITY],
+    /// Normal velocity of the deformable relative to the collider to reach.
+    pub(super) target: Real,
+    pub(super) normal_impulse: Real,
+    pub(super) friction_impulse: Vector,
+}
+
+impl Contact {
+    /// Adds the dynamic body it pushed (with a non-zero normal impulse), if any, to `pushed`.
+    pub fn note_pushed(
+        &self,
+        candidates: &[Candidate<'_>],
+        motions: &[BodyMotion],
+        pushed: &mut Vec<RigidBodyHandle>,
+    ) {
+        if self.normal_impulse > 0.0 {
+            if let Some(b) = candidates[self.candidate].rigid(motions) {
+                if !pushed.contains(&b) {
+                    pushed.push(b);
+                }
+            }
+        }
+    }
+
+    fn velocity(&self, velocities: &[Vector]) -> Vector {
+        (0..FACET_ARITY)
+            .map(|a| velocities[self.nodes[a] as usize] * self.weights[a])
+            .sum()
+    }
+
+    fn inv_mass(&self) -> Real {
+        (0..FACET_ARITY)
+            .map(|a| self.weights[a] * self.weights[a] * self.inv_masses[a])
+            .sum()
+    }
+
+    /// `impulse` on the deformable's side, its opposite on a dynamic body (see
+    /// [`Candidate::apply_impulse`] for `keep_path`).
+    fn apply(
+        &self,
+        impulse: Vector,
+        velocities: &mut [Vector],
+        cand: &Candidate<'_>,
+        at: &Substep<'_>,
+        bodies: &mut RigidBodySet,
+        keep_path: bool,
+    ) {
+        for a in 0..FACET_ARITY {
+            velocities[self.nodes[a] as usize] += impulse * (self.weights[a] * self.inv_masses[a]);
+        }
+        cand.apply_impulse(-impulse, self.anchor, at.motions, bodies, keep_path, at.dt);
+    }
+
+    /// One Gauss–Seidel update: the normal impulse towards the target, then friction.
+    pub fn solve(
+        &mut self,
+        velocities: &mut [Vector],
+        at: &Substep<'_>,
+        candidates: &[Candidate<'_>],
+        bodies: &mut RigidBodySet,
+    ) {
+        let (s1, dt, motions) = (at.s1, at.dt, at.motions);
+        let cand = &candidates[self.candidate];
+        let n = self.normal;
+        let own = self.inv_mass();
+        let (point, anchor) = (self.point, self.anchor);
+        let relative = |this: &Self, velocities: &[Vector], bodies: &RigidBodySet| {
+            this.velocity(velocities)
+                - cand.anchored_velocity(point, anchor, s1, dt, motions, bodies)
+        };
+        let k = own + cand.inv_mass_at(anchor, n, motions, bodies);
+        if k > 0.0 {
+            let vn = relative(self, velocities, bodies).dot(n);
+            let total = (self.normal_impulse + (self.target - vn) / k).max(0.0);
+            let dj = total - self.normal_impulse;
+            self.normal_impulse = total;
+            self.apply(n * dj, velocities, cand, at, bodies, false);
+        }
+        if cand.friction <= 0.0 {
+            return;
+        }
+        let vr = relative(self, velocities, bodies);
+        let vt = vr - n * vr.dot(n);
+        let slip = vt.length();
+        let mut total = self.friction_impulse;
+        if slip > 0.0 {
+            let t = vt / slip;
+            let kt = own + cand.inv_mass_at(anchor, t, motions, bodies);
+            if kt > 0.0 {
+                total -= t * (slip / kt);
+            }
+        }
+        let limit = cand.friction * self.normal_impulse;
+        let len = total.length();
+        if len > limit {
+            total *= limit / len;
+        }
+        let dj = total - self.friction_impulse;
+        self.friction_impulse = total;
+        self.apply(dj, velocities, cand, at, bodies, true);
+    }
+}

@@ -1,0 +1,389 @@
+//! The boundary with rapier: every read and write of rapier's rigid-body state that the
+//! deformables make lives here (`docs/ARCHITECTURE.md` §5).
+//!
+//! * **Reading motion.** [`BodyMotion`]: how a rigid body moves over the step — fixed bodies
+//!   stay put, position-based kinematic bodies go from `position()` to `next_position()`,
+//!   velocity-based ones and dynamic ones are predicted from their velocity, dynamic ones plus
+//!   [`rapier_drift`], what rapier's own step will add to their velocity.
+//! * **Writing impulses.** [`apply_impulse`]: a contact or a two-way binding changes a dynamic
+//!   body's velocity at once, at a point; friction impulses keep the path the body has already
+//!   travelled in the step. [`inv_mass_at`] is the body's side of every impulse's effective
+//!   mass.
+//! * **Compensating rapier's integration.** [`match_rapier_integration`]: rapier moves a body
+//!   by less than its whole velocity change over its substeps; a body the deformables pushed is
+//!   shifted so that rapier's step ends where the contacts predicted.
+//! * **Backup and restore.** [`RigidBackup`]: the dynamic bodies a deformable may push, as they
+//!   were before its step, put back when the step is rolled back.
+//!
+//! The unit tests below pin down what these rely on in rapier's integrator: if rapier changes
+//! how it integrates, they fail.
+
+use super::math::{self, AngVector, Pose, Real, Vector};
+use super::rapier::dynamics::{
+    RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType, RigidBodyVelocity,
+};
+use super::rapier::geometry::ColliderSet;
+
+/// Where in the step a substep is: its length `h`, the time `t` since the step began at its
+/// start and the fraction `s1` of the step at its end, the step `dt`, the restitution
+/// threshold of its contacts, and how every relevant rigid body moves over the step.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Substep<'a> {
+    pub h: Real,
+    pub t: Real,
+    pub s1: Real,
+    pub dt: Real,
+    pub restitution_threshold: Real,
+    pub motions: &'a [BodyMotion],
+}
+
+/// How a rigid body moves over the step, by its type.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) enum MotionKind {
+    Fixed,
+    Kinematic,
+    Dynamic,
+}
+
+/// How a rigid body moves over the step.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct BodyMotion {
+    pub handle: RigidBodyHandle,
+    pub kind: MotionKind,
+    pub pose0: Pose,
+    pub pose1: Pose,
+}
+
+impl BodyMotion {
+    pub fn new(handle: RigidBodyHandle, body: &RigidBody, dt: Real) -> Self {
+        let pose0 = *body.position();
+        let (kind, pose1) = match body.body_type() {
+            RigidBodyType::Fixed => (MotionKind::Fixed, pose0),
+            RigidBodyType::KinematicPositionBased => (MotionKind::Kinematic, *body.next_position()),
+            RigidBodyType::KinematicVelocityBased => (
+                MotionKind::Kinematic,
+                body.predict_position_using_velocity(dt),
+            ),
+            // Dynamic bodies, and rapier's own soft-body proxies, which count as dynamic.
+            _ => (
+                MotionKind::Dynamic,
+                body.predict_position_using_velocity(dt),
+            ),
+        };
+        BodyMotion {
+            handle,
+            kind,
+            pose0,
+            pose1,
+        }
+    }
+
+    /// The body's pose at fraction `s` of the step.
+    pub fn pose_at(&self, s: Real, dt: Real, bodies: &RigidBodySet) -> Pose {
+        match self.kind {
+            MotionKind::Fixed => self.pose0,
+            MotionKind::Kinematic => self.pose0.lerp(&self.pose1, s),
+            MotionKind::Dynamic => bodies
+                .get(self.handle)
+                .map_or(self.pose0, |b| b.predict_position_using_velocity(s * dt)),
+        }
+    }
+
+    /// Velocity of the material point at world position `p` (at fraction `s` of the step).
+    pub fn point_velocity(
+        &self,
+        p: Vector,
+        pose_s: &Pose,
+        dt: Real,
+        bodies: &RigidBodySet,
+    ) -> Vector {
+        match self.kind {
+            MotionKind::Fixed => Vector::ZERO,
+            MotionKind::Kinematic => {
+                let local = pose_s.inverse_transform_point(p);
+                (self.pose1.transform_point(local) - self.pose0.transform_point(local)) / dt
+            }
+            MotionKind::Dynamic => bodies
+                .get(self.handle)
+                .map_or(Vector::ZERO, |b| b.velocity_at_point(p)),
+        }
+    }
+
+    /// An upper bound of how far any point within `radius` of the body origin travels.
+    pub fn travel(&self, radius: Real) -> Real {
+        let t = (self.pose1.translation - self.pose0.translation).length();
+        let a = math::rotation_angle_between(self.pose0.rotation, self.pose1.rotation);
+        t + a * radius
+    }
+}
+
+/// Velocity rapier's step adds to a dynamic body: gravity and user forces (torques are left
+/// out), none while it sleeps.
+pub(crate) fn rapier_drift(body: &RigidBody, gravity: Vector, dt: Real) -> Vector {
+    if !body.is_dynamic() || body.is_sleeping() {
+        return Vector::ZERO;
+    }
+    let props = body.mass_properties();
+    (gravity * body.gravity_scale() * props.effective_mass() + body.user_force())
+        * props.effective_inv_mass
+        * dt
+}
+
+/// Makes rapier's step move a dynamic body that took contact impulses as the contacts
+/// predicted: with its velocity plus the whole [`rapier_drift`] over the step.
+///
+/// Rapier integrates in `N` substeps, so a body gains `drift` of velocity but moves only
+/// `(N + 1)/(2N) · drift · dt` of it. The contacts that just held a resting body set its
+/// velocity to `−drift`, for it to end the step at rest where it is; rapier would lift it by
+/// the difference and leave it at rest there, to fall back the next step, and so on (a resting
+/// body kept reporting a downward velocity of about `(N − 1)/(2N) · g dt`). The body is moved
+/// back by that difference beforehand.
+pub(crate) fn match_rapier_integration(
+    body: &mut RigidBody,
+    gravity: Vector,
+    dt: Real,
+    solver_iterations: usize,
+) {
+    let n = (solver_iterations + body.additional_solver_iterations()).max(1) as Real;
+    let lag = rapier_drift(body, gravity, dt) * (dt * (n - 1.0) / (2.0 * n));
+    if lag != Vector::ZERO {
+        let t = body.translation();
+        body.set_translation(t + lag, false);
+    }
+}
+
+/// Inverse mass of the dynamic body `body` felt by an impulse along `dir` (unit) at `point`:
+/// `dirᵀ M⁻¹ dir + (r × dir)ᵀ I⁻¹ (r × dir)`, with rapier's effective (lock-aware) values.
+pub(crate) fn inv_mass_at(body: &RigidBody, point: Vector, dir: Vector) -> Real {
+    let props = body.mass_properties();
+    let rn = math::cross(point - body.center_of_mass(), dir);
+    (props.effective_inv_mass * dir).dot(dir)
+        + math::ang_dot(rn, props.effective_world_inv_inertia * rn)
+}
+
+/// Gives `body` `impulse` at `point`: its velocity changes at once (see
+/// [`Candidate::apply_impulse`](super::contact::Candidate::apply_impulse) for the path). With
+/// `keep_path`, the body's pose is moved back by the velocity change over `elapsed` (the time
+/// of the step already gone), so that where it is now stays put.
+pub(crate) fn apply_impulse(
+    body: &mut RigidBody,
+    impulse: Vector,
+    point: Vector,
+    keep_path: bool,
+    elapsed: Real,
+) {
+    let (v0, w0) = (body.linvel(), body.angvel());
+    body.apply_impulse_at_point(impulse, point, true);
+    if keep_path && elapsed > 0.0 {
+        let change = RigidBodyVelocity::new(body.linvel() - v0, body.angvel() - w0);
+        let pose = change.integrate(-elapsed, body.position(), &body.local_center_of_mass());
+        body.set_position(pose, false);
+    }
+}
+
+/// Whether a rigid body moves this step: a dynamic body that is awake, a kinematic body with
+/// a next pose or a velocity.
+pub(crate) fn is_moving(body: &RigidBody) -> bool {
+    match body.body_type() {
+        RigidBodyType::Fixed => false,
+        RigidBodyType::KinematicPositionBased => {
+            let (p0, p1) = (body.position(), body.next_position());
+            p0.translation != p1.translation || p0.rotation != p1.rotation
+        }
+        RigidBodyType::KinematicVelocityBased => {
+            body.linvel() != Vector::ZERO || math::ang_norm(body.angvel()) != 0.0
+        }
+        _ => !body.is_sleeping(),
+    }
+}
+
+/// How far any collider attached to a moving body may travel in `dt` (a margin for broad-phase
+/// boxes, which rapier stores at the bodies' current poses).
+pub(crate) fn moving_margin(bodies: &RigidBodySet, colliders: &ColliderSet, dt: Real) -> Real {
+    let mut margin: Real = 0.0;
+    for (_, co) in colliders.iter() {
+        let Some(body) = co.parent().and_then(|p| bodies.get(p)) else {
+            continue;
+        };
+        if body.is_fixed() {
+            continue;
+        }
+        let radius = co.compute_aabb().half_extents().length()
+            + (co.position().translation - body.center_of_mass()).length();
+        let travel =
+            if body.is_kinematic() && body.body_type() == RigidBodyType::KinematicPositionBased {
+                let m = BodyMotion::new(RigidBodyHandle::invalid(), body, dt);
+                m.travel(radius)
+            } else {
+                (body.linvel().length() + math::ang_norm(body.angvel()) * radius) * dt
+            };
+        margin = margin.max(travel);
+    }
+    margin
+}
+
+/// The dynamic bodies a deformable may push in its step, as they were before it: handle, pose,
+/// linear and angular velocity.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RigidBackup(Vec<(RigidBodyHandle, Pose, Vector, AngVector)>);
+
+impl RigidBackup {
+    /// Saves the dynamic bodies among `motions`.
+    pub fn save(&mut self, motions: &[BodyMotion], bodies: &RigidBodySet) {
+        self.0.clear();
+        for m in motions.iter().filter(|m| m.kind == MotionKind::Dynamic) {
+            if let Some(rb) = bodies.get(m.handle) {
+                self.0
+                    .push((m.handle, *rb.position(), rb.linvel(), rb.angvel()));
+            }
+        }
+    }
+
+    /// Puts every saved body back as it was (a blow-up must not launch them).
+    pub fn restore(&self, bodies: &mut RigidBodySet) {
+        for (h, pose, linvel, angvel) in &self.0 {
+            if let Some(rb) = bodies.get_mut(*h) {
+                rb.set_position(*pose, false);
+                rb.set_linvel(*linvel, false);
+                rb.set_angvel(*angvel, false);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! What the coupling relies on in rapier's integrator, checked against rapier itself.
+
+    use super::super::math::{Real, Vector, UP};
+    use super::super::rapier::dynamics::RigidBodyBuilder;
+    use super::super::rapier::geometry::ColliderBuilder;
+    use super::super::rapier::pipeline::PhysicsWorld;
+    use super::*;
+
+    /// A world without ground holding one dynamic ball thrown sideways with a user force.
+    fn thrown() -> (PhysicsWorld, RigidBodyHandle) {
+        let mut world = PhysicsWorld::new();
+        world.integration_parameters.dt = 1.0 / 60.0;
+        let mut side = Vector::ZERO;
+        side[0] = 1.5;
+        let (h, _) = world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(UP * 2.0)
+                .linvel(side)
+                .can_sleep(false),
+            ColliderBuilder::ball(0.2).density(500.0),
+        );
+        world.bodies[h].add_force(side * 3.0, true);
+        (world, h)
+    }
+
+    fn close(a: Vector, b: Vector, tolerance: Real) -> bool {
+        (a - b).length() <= tolerance * (1.0 + b.length())
+    }
+
+    #[test]
+    fn rapier_drift_is_the_velocity_rapier_adds_in_its_step() {
+        let (mut world, h) = thrown();
+        let dt = world.integration_parameters.dt;
+        let before = world.bodies[h].linvel();
+        let drift = rapier_drift(&world.bodies[h], world.gravity, dt);
+        world.step();
+        let gained = world.bodies[h].linvel() - before;
+        assert!(
+            close(gained, drift, 1e-5),
+            "rapier added {gained:?}, the coupling predicts {drift:?}"
+        );
+    }
+
+    #[test]
+    fn after_the_compensation_rapier_moves_a_body_with_its_whole_new_velocity() {
+        let (mut world, h) = thrown();
+        let dt = world.integration_parameters.dt;
+        let iterations = world.integration_parameters.num_solver_iterations;
+        let start = world.bodies[h].translation();
+        let v = world.bodies[h].linvel();
+        let drift = rapier_drift(&world.bodies[h], world.gravity, dt);
+        match_rapier_integration(&mut world.bodies[h], world.gravity, dt, iterations);
+        world.step();
+        let moved = world.bodies[h].translation() - start;
+        let predicted = (v + drift) * dt;
+        assert!(
+            close(moved, predicted, 1e-5),
+            "rapier moved the body {moved:?}, the contacts predict {predicted:?}"
+        );
+        // Without the compensation it would not: the test can fail.
+        let (mut plain, h) = thrown();
+        let start = plain.bodies[h].translation();
+        plain.step();
+        let moved = plain.bodies[h].translation() - start;
+        assert!(
+            !close(moved, predicted, 1e-5),
+            "rapier's substeps lag: {moved:?}"
+        );
+    }
+
+    #[test]
+    fn a_dynamic_body_is_predicted_where_rapier_puts_it_without_forces() {
+        let (mut world, h) = thrown();
+        world.gravity = Vector::ZERO;
+        world.bodies[h].reset_forces(true);
+        world.bodies[h].set_angvel(math::planar_angle(2.0), true);
+        let dt = world.integration_parameters.dt;
+        let motion = BodyMotion::new(h, &world.bodies[h], dt);
+        world.step();
+        let at = *world.bodies[h].position();
+        assert!(close(motion.pose1.translation, at.translation, 1e-5));
+        assert!(math::rotation_angle_between(motion.pose1.rotation, at.rotation) < 1e-5);
+    }
+
+    #[test]
+    fn a_kinematic_body_ends_the_step_at_its_next_position() {
+        let mut world = PhysicsWorld::new();
+        let h = world.insert_body(RigidBodyBuilder::kinematic_position_based());
+        let target = Pose::from_translation(UP * 0.3);
+        world.bodies[h].set_next_kinematic_position(target);
+        let motion = BodyMotion::new(h, &world.bodies[h], world.integration_parameters.dt);
+        assert!(is_moving(&world.bodies[h]));
+        world.step();
+        let end = motion.pose_at(1.0, world.integration_parameters.dt, &world.bodies);
+        assert_eq!(end.translation, world.bodies[h].translation());
+    }
+
+    #[test]
+    fn a_friction_impulse_keeps_the_path_already_travelled() {
+        let (mut world, h) = thrown();
+        let rb = &mut world.bodies[h];
+        let before = *rb.position();
+        let point = rb.center_of_mass();
+        let mut push = Vector::ZERO;
+        push[0] = 0.4;
+        apply_impulse(rb, push, point, true, 0.01);
+        let dv = push * rb.mass_properties().effective_inv_mass;
+        // The pose moved back by the velocity change over the elapsed time.
+        assert!(close(
+            rb.translation(),
+            before.translation - dv * 0.01,
+            1e-6
+        ));
+        let (mut world, h) = thrown();
+        let rb = &mut world.bodies[h];
+        let point = rb.center_of_mass();
+        apply_impulse(rb, push, point, false, 0.01);
+        assert_eq!(rb.translation(), before.translation);
+    }
+
+    #[test]
+    fn a_backup_restores_pose_and_velocities() {
+        let (mut world, h) = thrown();
+        let motions = [BodyMotion::new(h, &world.bodies[h], 0.01)];
+        let mut backup = RigidBackup::default();
+        backup.save(&motions, &world.bodies);
+        let (pose, v) = (*world.bodies[h].position(), world.bodies[h].linvel());
+        world.step();
+        assert_ne!(world.bodies[h].translation(), pose.translation);
+        backup.restore(&mut world.bodies);
+        assert_eq!(*world.bodies[h].position(), pose);
+        assert_eq!(world.bodies[h].linvel(), v);
+    }
+}

@@ -1,0 +1,70 @@
+//! Phase 4 of a body's step: a body that blew up is rolled back and frozen.
+
+use super::super::body::Deformable;
+use super::super::math::{Real, Vector, DIM};
+use super::super::rapier::dynamics::RigidBodySet;
+use super::{Scratch, StepContext};
+
+/// Checks the state after the substeps: non-finite, so far out that it can only be a blow-up
+/// (|x| or |v| above 1e8), or a cell stretched past `max_stretch` in every direction. Such a
+/// body is rolled back to the start of the step and frozen, and the dynamic bodies it pushed
+/// get their state back; the report says which.
+///
+/// Returns the cell qualities of the state the body ends the step in, when it was sane (one
+/// pass over the cells serves the stretch test and the report), or `None` after a rollback.
+pub(super) fn contain(
+    body: &mut Deformable,
+    ctx: &StepContext<'_>,
+    bodies: &mut RigidBodySet,
+    sc: &Scratch,
+) -> Option<Quality> {
+    let sane = |v: &Vector| v.is_finite() && v.abs().max_element() < 1e8;
+    let finite = body.positions.iter().all(sane) && body.velocities.iter().all(sane);
+    let most = ctx.settings.max_stretch.powi(DIM as i32);
+    let quality = finite.then(|| Quality::of(body, most));
+    let exploded = quality.is_some_and(|q| q.stretched);
+    body.report.non_finite = !finite;
+    body.report.exploded = exploded;
+    if !finite || exploded {
+        body.positions.copy_from_slice(&body.saved_positions);
+        body.velocities.copy_from_slice(&body.saved_velocities);
+        body.frozen = true;
+        body.forces_valid = false;
+        // A blow-up must not launch the bodies it pushed.
+        sc.backup.restore(bodies);
+    }
+    quality.filter(|_| !exploded)
+}
+
+/// The cells' quality (signed volume over rest volume) over a body.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct Quality {
+    /// Cells collapsed or inverted (quality ≤ 0).
+    pub inverted: usize,
+    /// The smallest quality.
+    pub min_ratio: Real,
+    /// Whether a cell's quality is above the stretch limit it was measured with.
+    pub stretched: bool,
+}
+
+impl Quality {
+    /// One pass over the cells at the body's positions (`most`: the stretch limit, infinite
+    /// for none).
+    pub fn of(body: &Deformable, most: Real) -> Quality {
+        let mut q = Quality {
+            inverted: 0,
+            min_ratio: Real::INFINITY,
+            stretched: false,
+        };
+        let limited = most.is_finite();
+        for c in 0..body.mesh.num_cells() {
+            let ratio = body.mesh.cell_quality(c, &body.positions);
+            if ratio <= 0.0 {
+                q.inverted += 1;
+            }
+            q.min_ratio = q.min_ratio.min(ratio);
+            q.stretched |= limited && ratio > most;
+        }
+        q
+    }
+}

@@ -1,0 +1,107 @@
+//! Phases 5 and 7 of a body's step: the report (contacts, penetration, cell quality, energies,
+//! timings) and the contact events.
+
+use super::super::body::Deformable;
+use super::super::contact;
+use super::super::events::{DeformableContactEvent, DeformableEventHandler};
+use super::super::math::Real;
+use super::super::set::DeformableHandle;
+use super::containment::Quality;
+use super::substep::SubstepStats;
+use super::{Candidates, Scratch, StageTimes, StepContext};
+
+/// The step's contacts (node contacts first, then the facet contacts gathered during the
+/// substeps), the deepest penetration, the cells' quality and the substep counts, into the
+/// body's report. `quality` is that of the final state when containment measured it.
+pub(super) fn diagnose(
+    body: &mut Deformable,
+    sc: &mut Scratch,
+    candidates: &Candidates<'_>,
+    stats: SubstepStats,
+    quality: Option<Quality>,
+) {
+    sc.contacts.clear();
+    sc.contacts
+        .extend(sc.last_contact.iter().flatten().copied());
+    sc.contacts.append(&mut body.contacts);
+    std::mem::swap(&mut body.contacts, &mut sc.contacts);
+    let mut max_penetration: Real = 0.0;
+    for (k, &i) in body.mesh.boundary_nodes().iter().enumerate() {
+        let (b0, b1) = (sc.node_start[k] as usize, sc.node_start[k + 1] as usize);
+        if b0 < b1 {
+            max_penetration = max_penetration.max(contact::penetration(
+                body.positions[i as usize],
+                &sc.node_cands[b0..b1],
+                candidates,
+            ));
+        }
+    }
+    let quality = quality.unwrap_or_else(|| Quality::of(body, Real::INFINITY));
+    let r = &mut body.report;
+    r.frozen = body.frozen;
+    r.substeps = stats.substeps;
+    r.limiter_substeps = stats.limiter_substeps;
+    r.substep_cap_hit = stats.cap_hit;
+    r.lost_time = stats.lost_time;
+    r.contacts = sc.touched_nodes.iter().filter(|t| **t).count();
+    r.facet_contacts = stats.facet_contacts;
+    r.max_penetration = max_penetration;
+    r.inverted_elements = quality.inverted;
+    r.min_volume_ratio = quality.min_ratio;
+}
+
+/// Kinetic, gravitational and elastic energy at the end of the step, into the report.
+pub(super) fn energies(body: &mut Deformable, ctx: &StepContext<'_>) {
+    let g = ctx.gravity * body.gravity_scale;
+    let kinetic = body.kinetic_energy();
+    let gravity_energy = -body
+        .positions
+        .iter()
+        .zip(&body.masses)
+        .map(|(x, m)| m * g.dot(*x))
+        .sum::<Real>();
+    let elastic = body.state.elastic_energy(&body.positions);
+    let r = &mut body.report;
+    r.kinetic_energy = kinetic;
+    r.gravity_energy = gravity_energy;
+    r.elastic_energy = elastic;
+}
+
+/// The stage timings, into the report.
+pub(super) fn timings(body: &mut Deformable, times: &StageTimes) {
+    let r = &mut body.report;
+    r.time_forces = times.forces;
+    r.time_contacts = times.contacts;
+    r.time_integrate = times.integrate;
+}
+
+/// Contact events: the colliders touched this step against those of the last one.
+pub(super) fn send_events(
+    handle: DeformableHandle,
+    body: &mut Deformable,
+    sc: &mut Scratch,
+    events: &dyn DeformableEventHandler,
+) {
+    sc.now.clear();
+    sc.now.extend(
+        sc.near
+            .iter()
+            .zip(&sc.touched_colliders)
+            .filter(|(_, t)| **t)
+            .map(|(h, _)| *h),
+    );
+    sc.now.sort_unstable_by_key(|h| h.into_raw_parts());
+    for c in body.touching.iter().filter(|c| !sc.now.contains(c)) {
+        events.handle_contact_event(DeformableContactEvent::Stopped {
+            deformable: handle,
+            collider: *c,
+        });
+    }
+    for c in sc.now.iter().filter(|c| !body.touching.contains(c)) {
+        events.handle_contact_event(DeformableContactEvent::Started {
+            deformable: handle,
+            collider: *c,
+        });
+    }
+    std::mem::swap(&mut body.touching, &mut sc.now);
+}

@@ -1,0 +1,185 @@
+//! Phase 2 of a body's step: the state saved for a rollback, the motions of the rigid bodies
+//! around it, and the broad phase into candidate tables.
+
+use super::super::body::Deformable;
+use super::super::contact::{self, Candidate, Scan};
+use super::super::coupling::BodyMotion;
+use super::super::math::{Real, Vector, FACET_ARITY};
+use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
+use super::super::rapier::geometry::{Aabb, BoundingVolume};
+use super::{Candidates, Scratch, StepContext};
+
+/// The index of `handle`'s motion in `motions`, added if it is not there yet (`None`: the body
+/// is gone).
+fn motion_of(
+    motions: &mut Vec<BodyMotion>,
+    handle: RigidBodyHandle,
+    bodies: &RigidBodySet,
+    dt: Real,
+) -> Option<usize> {
+    if let Some(k) = motions.iter().position(|m| m.handle == handle) {
+        return Some(k);
+    }
+    let b = bodies.get(handle)?;
+    motions.push(BodyMotion::new(handle, b, dt));
+    Some(motions.len() - 1)
+}
+
+/// The box a node at `p` moving with `v` sweeps over the step under gravity `g`.
+fn swept(b: &mut Aabb, p: Vector, v: Vector, g: Vector, dt: Real) {
+    b.take_point(p);
+    b.take_point(p + v * dt + g * (0.5 * dt * dt));
+}
+
+/// Saves the state, gathers the motions of the bodies it is bound to and of the colliders
+/// near it, and fills the per-node and per-facet candidate tables of `sc`; returns the
+/// candidates.
+pub(super) fn prepare<'a>(
+    body: &mut Deformable,
+    ctx: &StepContext<'a>,
+    bodies: &RigidBodySet,
+    sc: &mut Scratch,
+) -> Candidates<'a> {
+    let dt = ctx.dt;
+    let g = ctx.gravity * body.gravity_scale;
+    body.saved_positions.copy_from_slice(&body.positions);
+    body.saved_velocities.copy_from_slice(&body.velocities);
+
+    // Bodies this deformable is bound to, and how every relevant body moves.
+    sc.motions.clear();
+    body.bindings.bodies(&mut sc.attached_bodies);
+    sc.attachment_motion.clear();
+    for a in body.bindings.list() {
+        let m = motion_of(&mut sc.motions, a.body, bodies, dt);
+        sc.attachment_motion.push(m);
+    }
+
+    // Broad phase, once per deformable and then once per surface node.
+    let surface = body.mesh.boundary_nodes();
+    let facets = body.mesh.boundary_facets();
+    let mut region = Aabb::new_invalid();
+    let mut shortest = Real::INFINITY;
+    for &i in surface {
+        let i = i as usize;
+        swept(&mut region, body.positions[i], body.velocities[i], g, dt);
+    }
+    for f in facets {
+        for a in 0..FACET_ARITY {
+            for b in a + 1..FACET_ARITY {
+                shortest = shortest
+                    .min(body.positions[f[a] as usize].distance(body.positions[f[b] as usize]));
+            }
+        }
+    }
+    // Element forces can turn a node around within the step: widen every box by a quarter
+    // of the shortest surface edge, on top of the motion predicted from the velocities.
+    let size = (region.maxs - region.mins).max_element().max(1e-3);
+    let node_margin = if shortest.is_finite() {
+        0.25 * shortest
+    } else {
+        0.0
+    } + 1e-3 * size
+        + 1e-4;
+    let widen = node_margin + ctx.margin;
+    let region = region.loosened(widen);
+    let scan = Scan {
+        bodies,
+        colliders: ctx.colliders,
+        broad_phase: ctx.broad_phase,
+        indexed: ctx.indexed,
+        material: &body.contact,
+        gravity: ctx.gravity,
+        dt,
+    };
+    contact::near_colliders(&scan, region, &sc.attached_bodies, &mut sc.near);
+    let mut candidates: Vec<Candidate<'a>> = Vec::with_capacity(sc.near.len());
+    for &h in &sc.near {
+        let Some(co) = ctx.colliders.get(h) else {
+            continue;
+        };
+        let m = co
+            .parent()
+            .and_then(|p| motion_of(&mut sc.motions, p, bodies, dt));
+        let spacing = 0.5 * shortest.max(1e-4);
+        candidates.push(contact::candidate(
+            &scan,
+            h,
+            co,
+            m,
+            &sc.motions,
+            &region,
+            spacing,
+        ));
+    }
+    sc.near.clear();
+    sc.near.extend(candidates.iter().map(|c| c.handle));
+    sc.touched_colliders.clear();
+    sc.touched_colliders.resize(candidates.len(), false);
+    sc.backup.save(&sc.motions, bodies);
+    tables(body, &scan, &candidates, widen, sc);
+    body.contacts.clear();
+    candidates
+}
+
+/// The per-surface-node and per-surface-facet candidate tables (compressed rows), and the
+/// per-step contact buffers cleared.
+fn tables(
+    body: &Deformable,
+    scan: &Scan<'_>,
+    candidates: &[Candidate<'_>],
+    widen: Real,
+    sc: &mut Scratch,
+) {
+    let (dt, g) = (scan.dt, scan.gravity * body.gravity_scale);
+    let surface = body.mesh.boundary_nodes();
+    sc.node_start.clear();
+    sc.node_cands.clear();
+    sc.node_start.push(0);
+    for &i in surface {
+        if !candidates.is_empty() && !body.is_attached(i) {
+            let mut b = Aabb::new_invalid();
+            swept(
+                &mut b,
+                body.positions[i as usize],
+                body.velocities[i as usize],
+                g,
+                dt,
+            );
+            contact::node_candidates(scan, b.loosened(widen), candidates, &mut sc.node_cands);
+        }
+        sc.node_start.push(sc.node_cands.len() as u32);
+    }
+    sc.facet_start.clear();
+    sc.facet_cands.clear();
+    sc.facet_start.push(0);
+    let with_features = candidates.iter().any(|c| !c.features.is_empty());
+    for f in body.mesh.boundary_facets() {
+        if with_features && !f.iter().all(|&i| body.is_attached(i)) {
+            let mut b = Aabb::new_invalid();
+            for &i in f {
+                swept(
+                    &mut b,
+                    body.positions[i as usize],
+                    body.velocities[i as usize],
+                    g,
+                    dt,
+                );
+            }
+            let begin = sc.facet_cands.len();
+            contact::node_candidates(scan, b.loosened(widen), candidates, &mut sc.facet_cands);
+            let mut k = begin;
+            while k < sc.facet_cands.len() {
+                if candidates[sc.facet_cands[k] as usize].features.is_empty() {
+                    sc.facet_cands.swap_remove(k);
+                } else {
+                    k += 1;
+                }
+            }
+        }
+        sc.facet_start.push(sc.facet_cands.len() as u32);
+    }
+    sc.touched_nodes.clear();
+    sc.touched_nodes.resize(surface.len(), false);
+    sc.last_contact.clear();
+    sc.last_contact.resize(surface.len(), None);
+}

@@ -1,0 +1,119 @@
+//! Phases 1 and 6 of a body's step: waking a sleeping body when something disturbs it, and
+//! putting a still one to sleep (rapier's thresholds: [`PipelineSettings`]'s `sleep_speed` and
+//! `time_until_sleep`).
+//!
+//! [`PipelineSettings`]: super::PipelineSettings
+
+use super::super::body::Deformable;
+use super::super::contact::{self, Scan};
+use super::super::coupling::is_moving;
+use super::super::math::{Real, Vector};
+use super::super::rapier::dynamics::RigidBodySet;
+use super::super::rapier::geometry::{Aabb, BoundingVolume};
+use super::{Scratch, StepContext};
+
+/// Wakes a sleeping body that something disturbs (or that may no longer sleep); returns
+/// whether it is still asleep.
+pub(super) fn stays_asleep(
+    body: &mut Deformable,
+    ctx: &StepContext<'_>,
+    bodies: &RigidBodySet,
+    sc: &mut Scratch,
+) -> bool {
+    if body.sleeping && (!body.can_sleep || disturbed(body, ctx, bodies, sc)) {
+        body.wake_up();
+    }
+    body.sleeping
+}
+
+/// The report of a body that slept through the step: not simulated, contacts (and so events)
+/// unchanged.
+pub(super) fn report_asleep(body: &mut Deformable, detached: usize) {
+    let r = &mut body.report;
+    r.sleeping = true;
+    r.substeps = 0;
+    r.limiter_substeps = 0;
+    r.time_forces = 0.0;
+    r.time_contacts = 0.0;
+    r.time_integrate = 0.0;
+    r.detached = detached;
+    r.attached_nodes = body.bindings.len();
+}
+
+/// Whether something wakes a sleeping deformable: a bone it is bound to moves, a collider it
+/// touched was removed, or a moving body's collider is near it.
+fn disturbed(
+    body: &Deformable,
+    ctx: &StepContext<'_>,
+    bodies: &RigidBodySet,
+    sc: &mut Scratch,
+) -> bool {
+    body.bindings.bodies(&mut sc.attached_bodies);
+    if sc
+        .attached_bodies
+        .iter()
+        .any(|h| bodies.get(*h).is_none_or(is_moving))
+    {
+        return true;
+    }
+    if body.touching.iter().any(|c| !ctx.colliders.contains(*c)) {
+        return true;
+    }
+    let mut region = Aabb::new_invalid();
+    for &i in body.mesh.boundary_nodes() {
+        region.take_point(body.positions[i as usize]);
+    }
+    let size = (region.maxs - region.mins).max_element().max(1e-3);
+    let scan = Scan {
+        bodies,
+        colliders: ctx.colliders,
+        broad_phase: ctx.broad_phase,
+        indexed: ctx.indexed,
+        material: &body.contact,
+        gravity: ctx.gravity,
+        dt: ctx.dt,
+    };
+    contact::near_colliders(
+        &scan,
+        region.loosened(ctx.margin + 1e-2 * size),
+        &sc.attached_bodies,
+        &mut sc.near,
+    );
+    let woken = sc.near.iter().any(|h| {
+        ctx.colliders
+            .get(*h)
+            .and_then(|c| c.parent())
+            .and_then(|p| bodies.get(p))
+            .is_some_and(is_moving)
+    });
+    sc.near.clear();
+    woken
+}
+
+/// After a simulated step: a body still long enough (every free node slower than
+/// `sleep_speed`, no bone or nearby body moving, its state `sane`) falls asleep, at rest.
+pub(super) fn update(
+    body: &mut Deformable,
+    ctx: &StepContext<'_>,
+    bodies: &RigidBodySet,
+    sc: &Scratch,
+    sane: bool,
+) {
+    let quiet = sc
+        .motions
+        .iter()
+        .all(|m| bodies.get(m.handle).is_some_and(|b| !is_moving(b)));
+    let max_speed = (0..body.positions.len())
+        .filter(|&i| !body.is_attached(i as u32))
+        .map(|i| body.velocities[i].length())
+        .fold(0.0, Real::max);
+    if body.can_sleep && sane && quiet && max_speed < ctx.settings.sleep_speed {
+        body.still_time += ctx.dt;
+    } else {
+        body.still_time = 0.0;
+    }
+    if body.still_time >= ctx.settings.time_until_sleep {
+        body.sleeping = true;
+        body.velocities.fill(Vector::ZERO);
+    }
+}
