@@ -88,10 +88,10 @@ pub enum BuildError {
         /// How many cells share it.
         cells: usize,
     },
-    /// A mesh warning ([`MeshWarning`](super::mesh::MeshWarning)) turned into an error by
+    /// A mesh warning ([`MeshWarning`]) turned into an error by
     /// `DeformableBuilder::deny_warnings`.
     #[error("mesh warning denied: {0}")]
-    MeshWarning(super::mesh::MeshWarning),
+    MeshWarning(MeshWarning),
     /// The material is so stiff for its mass that one step needs more substeps than the
     /// pipeline allows (`PipelineSettings::max_substeps`).
     #[error("too stiff for the step: a step of {dt} s needs {substeps:.0} substeps at rest (stable substep {substep:e} s), more than the {max_substeps} allowed; lower the stiffness, raise the mass or shorten the step")]
@@ -142,5 +142,39 @@ pub enum BuildError {
         model: &'static str,
         /// Cell kind name.
         kind: &'static str,
+    },
+}
+
+/// Something legal in a mesh that is probably a mistake. [`Mesh::diagnose`](super::Mesh::diagnose) lists them;
+/// [`crate::DeformableBuilder`]'s `deny_warnings` turns them into errors.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshWarning {
+    /// Two nodes at the same place (within `1e-6` of the mesh's size). Cells that use one or
+    /// the other are not connected there: the mesh is cut, and with no self-contact the two
+    /// sides can pass through each other. [`Mesh::merge_coincident_nodes`](super::Mesh::merge_coincident_nodes) welds them.
+    #[error("nodes {first} and {second} coincide ({distance:e} apart): the mesh is cut there; Mesh::merge_coincident_nodes welds them")]
+    CoincidentNodes {
+        /// The lower index.
+        first: u32,
+        /// The higher index.
+        second: u32,
+        /// Their distance.
+        distance: Real,
+    },
+    /// A surface ridge (an edge in 3D, a node in 2D) shared by other than two boundary facets:
+    /// two parts touch along it only, and a contact normal there is ambiguous.
+    #[error("the surface is not manifold at nodes {nodes:?}: {facets} boundary facets meet there, not 2")]
+    NonManifoldSurface {
+        /// The ridge's nodes (two in 3D, one in 2D).
+        nodes: Vec<u32>,
+        /// Boundary facets that share it.
+        facets: usize,
+    },
+    /// The cells form several pieces that share no node: they move independently.
+    #[error("the mesh is in {pieces} pieces that share no node (they move as separate bodies)")]
+    Disconnected {
+        /// Number of pieces.
+        pieces: usize,
     },
 }

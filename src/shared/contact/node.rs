@@ -2,9 +2,10 @@
 //! frame (see the module docs of [`super`]).
 
 use super::super::coupling::Substep;
-use super::super::math::{Real, Vector, FACET_ARITY};
+use super::super::math::{Pose, Real, Vector, FACET_ARITY};
 use super::super::rapier::dynamics::RigidBodySet;
 use super::super::rapier::geometry::{Aabb, BoundingVolume, Ray};
+use super::super::rapier::parry::shape::Shape;
 use super::candidates::Candidate;
 use super::solve::Contact;
 
@@ -85,60 +86,8 @@ pub(crate) fn resolve_node(
         let a = p0.inverse_transform_point(start);
         let b = p1.inverse_transform_point(end);
         let hit = if shape.contains_local_point(a) {
-            // Out by the closest surface point, unless that is the far side of a thin collider
-            // the node has crossed the middle of: then back out of the face it came in by (a
-            // ray cast back along its motion relative to the collider, no further than it moved
-            // in a substep), along that face's normal so that it is not dragged back along the
-            // surface.
-            // The normal comes from the feature projected on (a face's own normal), not from
-            // the tiny, noisy offset of a node a hair inside.
-            let (proj, feature) = shape.project_local_point_and_get_feature(a);
-            let offset = proj.point - a;
-            let depth = offset.length();
-            let feature_normal = shape
-                .feature_normal_at_point(Default::default(), feature, proj.point)
-                .filter(|n| n.is_finite() && n.length_squared() > 0.5);
-            if depth <= Real::EPSILON {
-                // On the surface: a touching contact (gap 0), so that the velocity constraint
-                // holds; skipping it let a resting node sink for a substep, be pushed out the
-                // next, and chatter forever.
-                feature_normal.map(|n| NodeHit {
-                    toi: 0.0,
-                    normal: n,
-                    local: a,
-                    gap: 0.0,
-                    candidate: ci,
-                    inside: false,
-                })
-            } else {
-                let mut local = proj.point;
-                let mut normal = feature_normal.unwrap_or(offset / depth);
-                let rel = v_before - cand.point_velocity(start, s1, dt, motions, bodies);
-                if rel.length_squared() > 1e-12 {
-                    let back = Ray::new(a, p0.rotation.inverse() * -rel.normalize());
-                    let reach = rel.length() * h + 2.0 * depth + 1e-6;
-                    if let Some(hit) = shape.cast_local_ray_and_get_normal(&back, reach, false) {
-                        // Leaving the shape: the outward normal points along the ray.
-                        let nb = if hit.normal.dot(back.dir) < 0.0 {
-                            -hit.normal
-                        } else {
-                            hit.normal
-                        };
-                        if nb.length_squared() > 0.5 && nb.dot(normal) < 0.0 {
-                            normal = nb;
-                            local = a + nb * nb.dot(back.point_at(hit.time_of_impact) - a);
-                        }
-                    }
-                }
-                Some(NodeHit {
-                    toi: 0.0,
-                    normal,
-                    local,
-                    gap: -(local - a).length(),
-                    candidate: ci,
-                    inside: true,
-                })
-            }
+            let rel = || v_before - cand.point_velocity(start, s1, dt, motions, bodies);
+            hit_from_inside(shape, a, p0, rel, h, ci)
         } else if a != b {
             let ray = Ray::new(a, b - a);
             shape
@@ -202,6 +151,73 @@ pub(crate) fn resolve_node(
         normal_impulse: 0.0,
         friction_impulse: Vector::ZERO,
     })
+}
+
+/// The surface a node found inside a collider (at `a` in the collider's frame, whose pose at
+/// the start of the substep is `p0`) is put back on; `rel` gives its velocity relative to the
+/// collider.
+fn hit_from_inside(
+    shape: &dyn Shape,
+    a: Vector,
+    p0: &Pose,
+    rel: impl FnOnce() -> Vector,
+    h: Real,
+    ci: usize,
+) -> Option<NodeHit> {
+    // Out by the closest surface point, unless that is the far side of a thin collider
+    // the node has crossed the middle of: then back out of the face it came in by (a
+    // ray cast back along its motion relative to the collider, no further than it moved
+    // in a substep), along that face's normal so that it is not dragged back along the
+    // surface.
+    // The normal comes from the feature projected on (a face's own normal), not from
+    // the tiny, noisy offset of a node a hair inside.
+    let (proj, feature) = shape.project_local_point_and_get_feature(a);
+    let offset = proj.point - a;
+    let depth = offset.length();
+    let feature_normal = shape
+        .feature_normal_at_point(Default::default(), feature, proj.point)
+        .filter(|n| n.is_finite() && n.length_squared() > 0.5);
+    if depth <= Real::EPSILON {
+        // On the surface: a touching contact (gap 0), so that the velocity constraint
+        // holds; skipping it let a resting node sink for a substep, be pushed out the
+        // next, and chatter forever.
+        feature_normal.map(|n| NodeHit {
+            toi: 0.0,
+            normal: n,
+            local: a,
+            gap: 0.0,
+            candidate: ci,
+            inside: false,
+        })
+    } else {
+        let mut local = proj.point;
+        let mut normal = feature_normal.unwrap_or(offset / depth);
+        let rel = rel();
+        if rel.length_squared() > 1e-12 {
+            let back = Ray::new(a, p0.rotation.inverse() * -rel.normalize());
+            let reach = rel.length() * h + 2.0 * depth + 1e-6;
+            if let Some(hit) = shape.cast_local_ray_and_get_normal(&back, reach, false) {
+                // Leaving the shape: the outward normal points along the ray.
+                let nb = if hit.normal.dot(back.dir) < 0.0 {
+                    -hit.normal
+                } else {
+                    hit.normal
+                };
+                if nb.length_squared() > 0.5 && nb.dot(normal) < 0.0 {
+                    normal = nb;
+                    local = a + nb * nb.dot(back.point_at(hit.time_of_impact) - a);
+                }
+            }
+        }
+        Some(NodeHit {
+            toi: 0.0,
+            normal,
+            local,
+            gap: -(local - a).length(),
+            candidate: ci,
+            inside: true,
+        })
+    }
 }
 
 /// Depth of `x` inside the deepest of the given candidates (zero when outside all).

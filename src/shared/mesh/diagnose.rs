@@ -3,43 +3,9 @@
 
 use std::collections::HashMap;
 
-use super::super::error::BuildError;
+use super::super::error::{BuildError, MeshWarning};
 use super::super::math::{Real, Vector, DIM, FACET_ARITY};
 use super::{CellKind, Mesh};
-
-/// Something legal in a mesh that is probably a mistake. [`Mesh::diagnose`] lists them;
-/// [`crate::DeformableBuilder`]'s `deny_warnings` turns them into errors.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum MeshWarning {
-    /// Two nodes at the same place (within `1e-6` of the mesh's size). Cells that use one or
-    /// the other are not connected there: the mesh is cut, and with no self-contact the two
-    /// sides can pass through each other. [`Mesh::merge_coincident_nodes`] welds them.
-    #[error("nodes {first} and {second} coincide ({distance:e} apart): the mesh is cut there; Mesh::merge_coincident_nodes welds them")]
-    CoincidentNodes {
-        /// The lower index.
-        first: u32,
-        /// The higher index.
-        second: u32,
-        /// Their distance.
-        distance: Real,
-    },
-    /// A surface ridge (an edge in 3D, a node in 2D) shared by other than two boundary facets:
-    /// two parts touch along it only, and a contact normal there is ambiguous.
-    #[error("the surface is not manifold at nodes {nodes:?}: {facets} boundary facets meet there, not 2")]
-    NonManifoldSurface {
-        /// The ridge's nodes (two in 3D, one in 2D).
-        nodes: Vec<u32>,
-        /// Boundary facets that share it.
-        facets: usize,
-    },
-    /// The cells form several pieces that share no node: they move independently.
-    #[error("the mesh is in {pieces} pieces that share no node (they move as separate bodies)")]
-    Disconnected {
-        /// Number of pieces.
-        pieces: usize,
-    },
-}
 
 impl Mesh {
     /// What is legal in this mesh but probably a mistake: coincident nodes, a surface that is

@@ -13,7 +13,7 @@ pub mod io;
 mod lattice;
 mod voxel;
 
-pub use diagnose::MeshWarning;
+pub use super::error::MeshWarning;
 
 use std::collections::HashMap;
 

@@ -47,13 +47,7 @@ impl Mesh {
         cell_size: Real,
         kind: CellKind,
     ) -> Result<Mesh, BuildError> {
-        if !(cell_size.is_finite() && cell_size > 0.0) {
-            return Err(BuildError::InvalidParameter {
-                name: "cell_size",
-                value: cell_size,
-                expected: "a positive finite cell size",
-            });
-        }
+        check_cell_size(cell_size)?;
         let oriented: TriMesh;
         let shape: &dyn Shape = match shape.as_trimesh() {
             Some(t) if !t.flags().contains(TriMeshFlags::ORIENTED) => {
@@ -193,5 +187,18 @@ impl Mesh {
             *p += centre;
         }
         Ok(mesh)
+    }
+}
+
+/// A cell size must be positive and finite.
+fn check_cell_size(cell_size: Real) -> Result<(), BuildError> {
+    if cell_size.is_finite() && cell_size > 0.0 {
+        Ok(())
+    } else {
+        Err(BuildError::InvalidParameter {
+            name: "cell_size",
+            value: cell_size,
+            expected: "a positive finite cell size",
+        })
     }
 }

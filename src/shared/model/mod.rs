@@ -399,6 +399,9 @@ impl Elements {
     }
 }
 
+// The nonlinear springs' constant is half the linear springs' (their rest stiffness is 2k).
+const _: () = assert!(nonlinear_springs::MATERIAL_SCALE == 0.5 * springs::MATERIAL_SCALE);
+
 /// Reduced mass of two nodes.
 #[inline]
 pub(crate) fn reduced_mass(a: Real, b: Real) -> Real {

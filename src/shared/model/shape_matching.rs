@@ -83,8 +83,22 @@ pub fn residual_torque(rest: &[Vector], current: &[Vector], q: Rotation, k: Real
     math::ang_norm(t)
 }
 
+/// The law of one shape-based cell: stiffness `k` and damping `c` per vertex, how its rotation
+/// is fitted and which velocity is damped.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct CellLaw {
+    /// Stiffness per vertex, N/m.
+    pub k: Real,
+    /// Damping per vertex, N·s/m.
+    pub c: Real,
+    /// How the rotation is found.
+    pub fit: RotationFit,
+    /// Which velocity is damped.
+    pub damping: ShapeDamping,
+}
+
 /// Forces of one shape-based element with `N` vertices at `x` moving with `v`, rest offsets
-/// `rest` (from the rest centroid), stiffness `k` and damping `c` per vertex. Returns the force
+/// `rest` (from the rest centroid), under `law`, its rotation warm-started from `warm`. Returns the force
 /// on each vertex, the fitted rotation, and the smallest sum of two singular values of
 /// `A = Σ r_i R0_iᵀ` (see [`ShapeMatching::turning_stiffness`]).
 ///
@@ -92,18 +106,15 @@ pub fn residual_torque(rest: &[Vector], current: &[Vector], q: Rotation, k: Real
 /// centroid of coordinates far from the origin, `Σx · (1/n)`, is off by an ulp of `x`, and that
 /// error times `k` was a net force on the cell that grew with Young's modulus (a stiff 2D
 /// beam stretched 1.3 mm with gravity off).
-#[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn element_forces<const N: usize>(
     rest: &[Vector; N],
     x: &[Vector; N],
     v: &[Vector; N],
-    k: Real,
-    c: Real,
-    fit: RotationFit,
-    damping: ShapeDamping,
+    law: CellLaw,
     warm: Rotation,
 ) -> ([Vector; N], Rotation, Real) {
+    let CellLaw { k, c, fit, damping } = law;
     let inv_n = 1.0 / N as Real;
     let x0 = x[0];
     let xc = x.iter().map(|xa| *xa - x0).sum::<Vector>() * inv_n;
@@ -257,7 +268,8 @@ impl ShapeMatching {
         let (rest, _) = self.rest.as_chunks::<N>();
         for (cell, (ids, rest)) in cells.iter().zip(rest).enumerate() {
             let (k, c, q) = (self.k[cell], self.c[cell], self.rotations[cell]);
-            let (f, q, pair) = cell_forces(ids, rest, k, c, fit, damping, q, x, v);
+            let law = CellLaw { k, c, fit, damping };
+            let (f, q, pair) = cell_forces(ids, rest, law, q, x, v);
             self.rotations[cell] = q;
             let turning = self.turning_stiffness(cell, pair);
             for a in 0..N {
@@ -314,8 +326,13 @@ impl ShapeMatching {
                     let cell = first + j;
                     let (ids, rest) = (&cells[cell], &rest[cell]);
                     let pair;
-                    (*f, *q, pair) =
-                        cell_forces(ids, rest, k[cell], c[cell], fit, damping, *q, x, v);
+                    let law = CellLaw {
+                        k: k[cell],
+                        c: c[cell],
+                        fit,
+                        damping,
+                    };
+                    (*f, *q, pair) = cell_forces(ids, rest, law, *q, x, v);
                     let turning = turning(k[cell], rest_sum[cell], rest_pair[cell], pair);
                     for a in 0..N {
                         fk[a] = turning * rest[a].length();
@@ -352,20 +369,16 @@ fn turning(k: Real, rest_sum: Real, rest_pair: Real, pair: Real) -> Real {
 }
 
 /// [`element_forces`] of the cell with vertices `ids`.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn cell_forces<const N: usize>(
     ids: &[u32; N],
     rest: &[Vector; N],
-    k: Real,
-    c: Real,
-    fit: RotationFit,
-    damping: ShapeDamping,
+    law: CellLaw,
     warm: Rotation,
     x: &[Vector],
     v: &[Vector],
 ) -> ([Vector; N], Rotation, Real) {
     let xs = ids.map(|i| x[i as usize]);
     let vs = ids.map(|i| v[i as usize]);
-    element_forces(rest, &xs, &vs, k, c, fit, damping, warm)
+    element_forces(rest, &xs, &vs, law, warm)
 }

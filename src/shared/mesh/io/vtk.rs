@@ -78,6 +78,9 @@ struct Cells {
     connectivity: Vec<u64>,
 }
 
+// long-fn: a parser, one pass over the file's sections in the order the format puts them, each
+// error naming the line it is read at; split, it would pass the cursor and half-read state
+// around.
 fn parse(text: &str, file: &str) -> Result<Mesh, ReadError> {
     let mut c = Cursor::new(text, file, None);
     let Some(first) = c.raw_line() else {
