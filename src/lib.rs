@@ -40,18 +40,21 @@
 //! assert!(world.deformables[jelly].positions().iter().all(|p| p.is_finite()));
 //! ```
 //!
-//! Cargo features: `dim2` and `dim3` (default), `rerun` (logging to the Rerun viewer), `fem`
-//! (rapier's FEM soft bodies as peers of the scene runner), `parallel`: element forces of
+//! Cargo features: `dim2` and `dim3` (default), `rerun` (logging to the Rerun viewer), `parallel`: element forces of
 //! large bodies on rayon's threads, with rapier's own `parallel` (the parallel forces equal
 //! the serial ones bit for bit whatever the number of threads, see [`dim3::model`]), `serde`:
 //! snapshots of a running world that continue bit for bit (see [`dim3::snapshot`]), and
 //! `enhanced-determinism`: rapier's, for the same results across platforms.
 //!
+//! The design — the element models, the phases of a step, the rules of coupling with rapier
+//! and of contact, and which file owns what — is
+//! [`docs/ARCHITECTURE.md`](../docs/ARCHITECTURE.md) in the repository.
+//!
 //! A step is deterministic: the same inputs give the same state, bit for bit (wall-clock
 //! timings go into the reports only).
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
-// `src/shared/` is mounted twice on purpose, once per dimension (DESIGN.md §2).
+// `src/shared/` is mounted twice on purpose, once per dimension (docs/ARCHITECTURE.md §2).
 #![allow(clippy::duplicate_mod)]
 
 #[cfg(feature = "dim2")]

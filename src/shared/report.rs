@@ -1,4 +1,4 @@
-//! What each step reports (`DESIGN.md` §5).
+//! What each step reports (`docs/ARCHITECTURE.md` §8).
 
 use super::math::Real;
 use super::set::DeformableHandle;

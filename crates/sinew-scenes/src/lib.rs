@@ -7,9 +7,9 @@
 //! [`record::Record`] measured from node positions alone. The examples, the tests and the
 //! benches of sinew share it, so that they all measure the same thing.
 //!
-//! It is also for users' own integration tests: [`dim3::Sim`] runs a scene of their mesh,
-//! material and colliders and returns the record (apex, rest, penetration, inverted cells,
-//! energy) as plain data to assert on.
+//! It is also for users' own integration tests: [`dim3::testing::DropTest`] drops their mesh
+//! and material into their world of colliders and returns the record (apex, rest,
+//! penetration, inverted cells, energy) as plain data to assert on.
 //!
 //! The crate compiles one source tree twice, like sinew: [`dim2`] and [`dim3`]. Feature `fem`
 //! adds rapier's implicit FEM soft bodies as two more peers.

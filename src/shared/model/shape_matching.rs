@@ -1,6 +1,6 @@
 //! The shape-based element: each cell pulled towards its rest shape rotated about its
 //! centroid (the shape-based elasticity paper, §3–4; its equations were lost in extraction
-//! and are restated here and in `DESIGN.md` §3).
+//! and are restated here and in `docs/ARCHITECTURE.md` §3).
 //!
 //! With `r_i = x_i − x_c` the current offsets from the cell centroid (equal weights) and `R0_i`
 //! the rest offsets, the equilibrium shape is `R_i = M R0_i` for the rotation `M` that makes

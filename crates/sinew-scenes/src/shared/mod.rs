@@ -1,4 +1,4 @@
-//! Ready-made scenes from `DESIGN.md` §6, shared by the examples, the tests and the benches so
+//! Ready-made scenes (`docs/ARCHITECTURE.md` §10), shared by the examples, the tests and the benches so
 //! that they all measure the same thing — and run rapier's own soft bodies through the very
 //! same scenes, on the same mesh and material, as peers ([`Subject::Rapier`]).
 //!
@@ -26,6 +26,7 @@ pub mod metrics;
 mod rotation_error;
 mod sim;
 mod subject;
+pub mod testing;
 
 pub use crate::beam::{euler_bernoulli_tip_sag, sag_error};
 pub use crate::record::{Record, Spread};

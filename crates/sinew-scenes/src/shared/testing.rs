@@ -1,0 +1,122 @@
+//! A user's own fall-and-bounce scenario, run and measured as the harness's scenes are: their
+//! world (colliders, floors, other bodies), their mesh and material, one body dropped in it;
+//! the result is a [`Record`] of plain numbers to assert on in an integration test.
+//!
+//! ```
+//! use sinew::dim3::math::Vector;
+//! use sinew::dim3::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
+//! use sinew::dim3::{mesh::CellKind, DeformableWorld, ElementModel, Material, Mesh};
+//! use sinew_scenes::dim3::testing::DropTest;
+//!
+//! let mut world = DeformableWorld::new(); // dt = 1/60 s
+//! world.physics.insert(RigidBodyBuilder::fixed(), ColliderBuilder::cuboid(5.0, 0.1, 5.0));
+//! let mesh = Mesh::cuboid(Vector::splat(0.25), [4; 3], CellKind::Simplex).unwrap();
+//! let material = Material { density: 400.0, young_modulus: 2e4, ..Default::default() };
+//! let mut test = DropTest::new(world, mesh, material, ElementModel::EdgeRepulsion);
+//! (test.translation, test.floor_height, test.seconds) = (Vector::new(0.0, 1.0, 0.0), 0.1, 3.0);
+//! let record = test.run().unwrap();
+//! assert_eq!(record.max_inverted_elements, 0);
+//! assert!(record.max_penetration.unwrap() < 1e-3);
+//! assert!((record.rest_com.unwrap() - 0.35).abs() < 0.01); // rests on the floor's top
+//! ```
+
+use super::super::lib::math::{Real, Vector, UP};
+use super::super::lib::mesh::Mesh;
+use super::super::lib::{BuildError, DeformableWorld, Material};
+use super::sim::{BodySpec, Sim};
+use super::subject::Subject;
+use super::Record;
+
+/// One soft body dropped into a world of the user's (see the module docs).
+pub struct DropTest {
+    /// The world, with the user's colliders and bodies; its `dt` is the step.
+    pub world: DeformableWorld,
+    /// The body's rest mesh, in body coordinates.
+    pub mesh: Mesh,
+    /// Its material.
+    pub material: Material,
+    /// sinew's model (or rapier's soft body, as a peer).
+    pub subject: Subject,
+    /// Where the mesh's origin goes (default: the origin).
+    pub translation: Vector,
+    /// The body's friction and restitution coefficients (default 0.5 and 0.5).
+    pub friction: Real,
+    /// See `friction`.
+    pub restitution: Real,
+    /// Height of the floor's top, for the penetration and the bounce (default 0).
+    pub floor_height: Real,
+    /// Simulated time, s (default 3).
+    pub seconds: Real,
+}
+
+impl DropTest {
+    /// `mesh` of `material` as `subject`, in `world`, with the defaults above.
+    pub fn new(
+        world: DeformableWorld,
+        mesh: Mesh,
+        material: Material,
+        subject: impl Into<Subject>,
+    ) -> Self {
+        DropTest {
+            world,
+            mesh,
+            material,
+            subject: subject.into(),
+            translation: Vector::ZERO,
+            friction: 0.5,
+            restitution: 0.5,
+            floor_height: 0.0,
+            seconds: 3.0,
+        }
+    }
+
+    /// Runs the drop. The record holds the first bounce's apex and the rest height (centre of
+    /// mass), the deepest node below `floor_height`, inverted cells (most, and at the end),
+    /// the smallest volume ratio, the kinetic energy at the end, substeps and wall time.
+    pub fn run(self) -> Result<Record, BuildError> {
+        let dt = self.world.physics.integration_parameters.dt;
+        let size: Real = self
+            .mesh
+            .nodes()
+            .iter()
+            .map(|p| p.abs().max_element() * 2.0)
+            .fold(0.0, Real::max);
+        let mut spec = BodySpec::new(self.mesh, self.translation, self.material);
+        spec.friction = self.friction;
+        spec.restitution = self.restitution;
+        let mut sim = Sim::new(self.world, self.subject, spec, size.max(1e-6), None)?;
+        let steps = (self.seconds / dt).round().max(1.0) as usize;
+        let floor = self.floor_height;
+        let (mut rising, mut apex, mut highest) = (false, None, Real::NEG_INFINITY);
+        let mut max_penetration: Real = 0.0;
+        for _ in 0..steps {
+            sim.step();
+            let lowest = sim.lowest() - floor;
+            max_penetration = max_penetration.max(-lowest);
+            let com = sim.center_of_mass().dot(UP);
+            if apex.is_none() {
+                rising |= sim.center_of_mass_velocity().dot(UP) > 0.0 && lowest < 0.05 * size;
+                if rising {
+                    highest = highest.max(com);
+                    if sim.center_of_mass_velocity().dot(UP) <= 0.0 {
+                        apex = Some(highest);
+                    }
+                }
+            }
+            if sim.exploded() {
+                break;
+            }
+        }
+        let mut r = sim.record("drop", 0);
+        r.bounce_apex_com = apex.map(|a| a as f64);
+        r.rest_com = Some(sim.center_of_mass().dot(UP) as f64);
+        r.max_penetration = Some(max_penetration as f64);
+        r.failure = crate::record::failure(&[
+            (r.nan, "non-finite state"),
+            (r.exploded, "exploded"),
+            (r.final_inverted_elements > 0, "ended with inverted cells"),
+        ]);
+        r.failed = r.failure.is_some();
+        Ok(r)
+    }
+}
