@@ -3,16 +3,21 @@
 //!
 //! A node is bound to a rigid body at a local anchor (its position in the body's frame when it
 //! was attached). Every substep:
-//! * on a **fixed or kinematic** body the node is placed exactly on its anchor, the body's pose
-//!   interpolated between `position()` and `next_position()` (or predicted from its velocity for
-//!   a velocity-based kinematic body), and given the anchor's velocity;
-//! * on a **dynamic** body the binding is two-way: the node gets the velocity that takes it to
-//!   the anchor's predicted position at the end of the substep, and the opposite impulse goes to
-//!   the body at the anchor, scaled by the pair's effective mass so a light body is not
-//!   over-driven. Linear momentum of node + body is conserved exactly.
+//! * on a **fixed or kinematic** body the node gets the velocity `(target − x)/h` that takes it
+//!   to its anchor's position at the end of the substep (the body's pose interpolated between
+//!   `position()` and `next_position()`, or predicted from its velocity for a velocity-based
+//!   kinematic body), and after the positions move it is put exactly on that target;
+//! * on a **dynamic** body the binding is two-way, on velocities: the node is driven towards
+//!   the anchor's velocity plus a fifth of its position error per substep
+//!   (`v_anchor + 0.2 (anchor − x)/h`: a full correction on a body whose joints rapier solves
+//!   later feeds energy into the pair), and the opposite impulse goes to the body at the
+//!   anchor, scaled by the pair's effective mass so a light body is not over-driven. Linear
+//!   momentum of node + body is conserved exactly.
 //!
-//! Bound nodes take no part in contacts. A binding to a body that has been removed from the
-//! rigid-body set is dropped at the next step (the step report counts it).
+//! Bound nodes are not tested against colliders as nodes. A surface facet with bound nodes
+//! still meets rigid features; its bound nodes count with zero inverse mass there (the bone
+//! takes their share). A binding to a body that has been removed from the rigid-body set is
+//! dropped at the next step (the step report counts it).
 
 use super::coupling::{self, MotionKind, Substep};
 use super::math::{Real, Vector};

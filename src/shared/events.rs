@@ -16,8 +16,8 @@ pub enum DeformableContactEvent {
         /// The collider.
         collider: ColliderHandle,
     },
-    /// The first step without a contact after a step with (also when the collider or the
-    /// deformable was removed).
+    /// The first step without a contact after a step with (also when the collider was
+    /// removed). Removing the deformable sends none: its handle is gone with it.
     Stopped {
         /// The deformable.
         deformable: DeformableHandle,

@@ -12,6 +12,7 @@ mod contact;
 mod coupling;
 mod error;
 mod events;
+mod integrator;
 mod material;
 pub mod mesh;
 pub mod model;

@@ -88,7 +88,9 @@ mod imp {
     use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
     use super::super::attach::{Attachment, Bindings};
-    use super::super::body::{check_state, lumped_masses, Deformable};
+    use super::super::body::{
+        check_state, Activation, Deformable, LastStep, Rest, State, StepBuffers,
+    };
     use super::super::contact::{ContactMaterial, ContactPoint};
     use super::super::material::{Material, Resolved, Stiffness};
     use super::super::math::{Real, Rotation, Vector};
@@ -155,26 +157,26 @@ mod imp {
     impl Serialize for Deformable {
         fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
             DeformableData {
-                mesh: Cow::Borrowed(&self.mesh),
-                model: self.model,
-                material: self.params.material,
-                stiffness: self.params.stiffness,
-                positions: Cow::Borrowed(&self.positions),
-                velocities: Cow::Borrowed(&self.velocities),
-                warm_start: Cow::Borrowed(self.state.warm_start()),
-                acc: Cow::Borrowed(&self.acc),
-                forces_valid: self.forces_valid,
-                limiter: Some(self.limiter).filter(|l| l.is_finite()),
+                mesh: Cow::Borrowed(&self.rest.mesh),
+                model: self.rest.model,
+                material: self.rest.params.material,
+                stiffness: self.rest.params.stiffness,
+                positions: Cow::Borrowed(&self.state.positions),
+                velocities: Cow::Borrowed(&self.state.velocities),
+                warm_start: Cow::Borrowed(self.state.elements.warm_start()),
+                acc: Cow::Borrowed(&self.step.acc),
+                forces_valid: self.step.forces_valid,
+                limiter: Some(self.step.limiter).filter(|l| l.is_finite()),
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
-                frozen: self.frozen,
-                report: Cow::Borrowed(&self.report),
+                frozen: self.activation.frozen,
+                report: Cow::Borrowed(&self.last.report),
                 attachments: Cow::Borrowed(self.bindings.list()),
-                contacts: Cow::Borrowed(&self.contacts),
-                touching: Cow::Borrowed(&self.touching),
-                can_sleep: self.can_sleep,
-                sleeping: self.sleeping,
-                still_time: self.still_time,
+                contacts: Cow::Borrowed(&self.last.contacts),
+                touching: Cow::Borrowed(&self.last.touching),
+                can_sleep: self.activation.can_sleep,
+                sleeping: self.activation.sleeping,
+                still_time: self.activation.still_time,
                 user_data: self.user_data,
             }
             .serialize(s)
@@ -202,17 +204,24 @@ mod imp {
                     "element force arrays are not one value per node ({n})"
                 ));
             }
-            let (masses, inv_masses) = lumped_masses(&mesh, &params);
+            let rest = Rest::new(mesh, self.model, params);
             // The initial rotation only seeds the warm start, which the snapshot overwrites.
-            let mut state =
-                ModelState::build(self.model, &mesh, &masses, &params, Rotation::IDENTITY)
-                    .map_err(|e| e.to_string())?;
-            state.set_warm_start(&self.warm_start).map_err(|expected| {
-                format!(
-                    "{} warm-start rotations, expected {expected}",
-                    self.warm_start.len()
-                )
-            })?;
+            let mut elements = ModelState::build(
+                self.model,
+                &rest.mesh,
+                &rest.masses,
+                &rest.params,
+                Rotation::IDENTITY,
+            )
+            .map_err(|e| e.to_string())?;
+            elements
+                .set_warm_start(&self.warm_start)
+                .map_err(|expected| {
+                    format!(
+                        "{} warm-start rotations, expected {expected}",
+                        self.warm_start.len()
+                    )
+                })?;
             let c = &self.contact;
             let coefficients_ok = c.friction.is_finite()
                 && c.friction >= 0.0
@@ -225,33 +234,34 @@ mod imp {
                 );
             }
             let bindings = Bindings::from_list(self.attachments.into_owned(), n)?;
-            let positions = self.positions.into_owned();
-            let velocities = self.velocities.into_owned();
+            let state = State {
+                positions: self.positions.into_owned(),
+                velocities: self.velocities.into_owned(),
+                elements,
+            };
             Ok(Deformable {
-                saved_positions: positions.clone(),
-                saved_velocities: velocities.clone(),
-                scratch_velocities: velocities.clone(),
-                mesh,
-                model: self.model,
-                params,
+                step: StepBuffers::new(
+                    acc,
+                    self.forces_valid,
+                    self.limiter.unwrap_or(Real::INFINITY),
+                    &state,
+                ),
                 state,
-                positions,
-                velocities,
-                masses,
-                inv_masses,
-                acc,
-                forces_valid: self.forces_valid,
-                limiter: self.limiter.unwrap_or(Real::INFINITY),
+                rest,
+                activation: Activation {
+                    can_sleep: self.can_sleep,
+                    sleeping: self.sleeping,
+                    still_time: self.still_time,
+                    frozen: self.frozen,
+                },
+                last: LastStep {
+                    report: self.report.into_owned(),
+                    contacts: self.contacts.into_owned(),
+                    touching: self.touching.into_owned(),
+                },
+                bindings,
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
-                frozen: self.frozen,
-                report: self.report.into_owned(),
-                bindings,
-                contacts: self.contacts.into_owned(),
-                touching: self.touching.into_owned(),
-                can_sleep: self.can_sleep,
-                sleeping: self.sleeping,
-                still_time: self.still_time,
                 user_data: self.user_data,
             })
         }

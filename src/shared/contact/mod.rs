@@ -57,8 +57,7 @@ mod node;
 mod solve;
 
 pub(crate) use candidates::{
-    broad_phase_is_current, candidate, near_colliders, node_candidates, refresh_poses, Candidate,
-    Scan,
+    broad_phase_is_current, candidate, near_colliders, node_candidates, Candidate, Scan,
 };
 pub(crate) use facet::{resolve_facet, FacetMotion};
 pub(crate) use node::{penetration, resolve_node, FreeNode};

@@ -4,7 +4,8 @@ use super::super::coupling::BodyMotion;
 use super::super::coupling::Substep;
 use super::super::math::{Real, Vector, FACET_ARITY};
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
-use super::candidates::Candidate;
+use super::candidates::{refresh_poses, Candidate};
+use super::ContactPoint;
 
 /// A contact between the deformable (a node, or a point of a surface facet) and a collider,
 /// solved on velocities.
@@ -37,8 +38,31 @@ pub(crate) struct Contact {
 }
 
 impl Contact {
+    /// Solves the contact, brings the candidates of the body it pushed to that body's new
+    /// predicted pose, notes the body in `pushed`, and returns the contact as the step reports
+    /// it (`node`: the deformable's node, `None` for a facet contact).
+    pub fn settle(
+        &mut self,
+        velocities: &mut [Vector],
+        at: &Substep<'_>,
+        candidates: &mut [Candidate<'_>],
+        bodies: &mut RigidBodySet,
+        pushed: &mut Vec<RigidBodyHandle>,
+        node: Option<u32>,
+    ) -> ContactPoint {
+        self.solve(velocities, at, candidates, bodies);
+        refresh_poses(candidates, self.candidate, at.s1, at.dt, at.motions, bodies);
+        self.note_pushed(candidates, at.motions, pushed);
+        ContactPoint {
+            point: self.point,
+            normal: self.normal,
+            collider: candidates[self.candidate].handle,
+            node,
+        }
+    }
+
     /// Adds the dynamic body it pushed (with a non-zero normal impulse), if any, to `pushed`.
-    pub fn note_pushed(
+    fn note_pushed(
         &self,
         candidates: &[Candidate<'_>],
         motions: &[BodyMotion],
@@ -83,7 +107,7 @@ impl Contact {
     }
 
     /// One Gauss–Seidel update: the normal impulse towards the target, then friction.
-    pub fn solve(
+    fn solve(
         &mut self,
         velocities: &mut [Vector],
         at: &Substep<'_>,

@@ -15,7 +15,7 @@
 //! the facet's vertices with the barycentric weights of `E`; since `F_C ∥ EC` the pair has no
 //! moment, so linear and angular momentum are conserved.
 //!
-//! Two details make it work under explicit integration (`docs/ARCHITECTURE.md` §4.2):
+//! Two details make it work under explicit integration (`docs/ARCHITECTURE.md` §4.3):
 //! * the barrier's stiffness `k_r (1 + h0²/h²)` enters each node's stability bound, so the
 //!   substep shrinks as a cell compresses;
 //! * a *crossing limiter*: a substep may not let a vertex cover more than

@@ -46,8 +46,8 @@ fn deformed(model: ElementModel, kind: CellKind) -> (ModelState, Mesh, Vec<Vecto
         seed ^= seed << 17;
         (seed >> 40) as Real / (1u64 << 24) as Real - 0.5
     };
-    let mut x = body.positions.clone();
-    let mut v = body.velocities.clone();
+    let mut x = body.state.positions.clone();
+    let mut v = body.state.velocities.clone();
     for (x, v) in x.iter_mut().zip(&mut v) {
         *x *= 1.1;
         for d in 0..DIM {
@@ -55,7 +55,7 @@ fn deformed(model: ElementModel, kind: CellKind) -> (ModelState, Mesh, Vec<Vecto
             v[d] = random();
         }
     }
-    (body.state, body.mesh, x, v)
+    (body.state.elements, body.rest.mesh, x, v)
 }
 
 fn bits(acc: &Accumulator, limit: Real) -> Vec<u32> {
@@ -155,5 +155,5 @@ fn small_models_stay_serial_and_large_ones_split() {
         .model(ElementModel::EdgeRepulsion)
         .build()
         .expect("lattice builds");
-    assert!(large.state.split.is_some());
+    assert!(large.state.elements.split.is_some());
 }

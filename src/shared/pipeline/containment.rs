@@ -16,22 +16,22 @@ pub(super) fn contain(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
-    sc: &Scratch,
+    sc: &mut Scratch,
 ) -> Option<Quality> {
     let sane = |v: &Vector| v.is_finite() && v.abs().max_element() < 1e8;
-    let finite = body.positions.iter().all(sane) && body.velocities.iter().all(sane);
+    let finite = body.state.positions.iter().all(sane) && body.state.velocities.iter().all(sane);
     let most = ctx.settings.max_stretch.powi(DIM as i32);
     let quality = finite.then(|| Quality::of(body, most));
     let exploded = quality.is_some_and(|q| q.stretched);
-    body.report.non_finite = !finite;
-    body.report.exploded = exploded;
+    body.last.report.non_finite = !finite;
+    body.last.report.exploded = exploded;
     if !finite || exploded {
-        body.positions.copy_from_slice(&body.saved_positions);
-        body.velocities.copy_from_slice(&body.saved_velocities);
-        body.frozen = true;
-        body.forces_valid = false;
-        // A blow-up must not launch the bodies it pushed.
+        body.step.restore(&mut body.state);
+        body.activation.frozen = true;
+        // A blow-up must not launch the bodies it pushed; restored, they took no impulse of
+        // this body's and get no compensation for one.
         sc.backup.restore(bodies);
+        sc.pushed.truncate(sc.pushed_before);
     }
     quality.filter(|_| !exploded)
 }
@@ -57,8 +57,8 @@ impl Quality {
             stretched: false,
         };
         let limited = most.is_finite();
-        for c in 0..body.mesh.num_cells() {
-            let ratio = body.mesh.cell_quality(c, &body.positions);
+        for c in 0..body.rest.mesh.num_cells() {
+            let ratio = body.rest.mesh.cell_quality(c, &body.state.positions);
             if ratio <= 0.0 {
                 q.inverted += 1;
             }

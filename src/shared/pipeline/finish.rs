@@ -23,22 +23,22 @@ pub(super) fn diagnose(
     sc.contacts.clear();
     sc.contacts
         .extend(sc.last_contact.iter().flatten().copied());
-    sc.contacts.append(&mut body.contacts);
-    std::mem::swap(&mut body.contacts, &mut sc.contacts);
+    sc.contacts.append(&mut body.last.contacts);
+    std::mem::swap(&mut body.last.contacts, &mut sc.contacts);
     let mut max_penetration: Real = 0.0;
-    for (k, &i) in body.mesh.boundary_nodes().iter().enumerate() {
+    for (k, &i) in body.rest.mesh.boundary_nodes().iter().enumerate() {
         let (b0, b1) = (sc.node_start[k] as usize, sc.node_start[k + 1] as usize);
         if b0 < b1 {
             max_penetration = max_penetration.max(contact::penetration(
-                body.positions[i as usize],
+                body.state.positions[i as usize],
                 &sc.node_cands[b0..b1],
                 candidates,
             ));
         }
     }
     let quality = quality.unwrap_or_else(|| Quality::of(body, Real::INFINITY));
-    let r = &mut body.report;
-    r.frozen = body.frozen;
+    let r = &mut body.last.report;
+    r.frozen = body.activation.frozen;
     r.substeps = stats.substeps;
     r.limiter_substeps = stats.limiter_substeps;
     r.substep_cap_hit = stats.cap_hit;
@@ -55,13 +55,14 @@ pub(super) fn energies(body: &mut Deformable, ctx: &StepContext<'_>) {
     let g = ctx.gravity * body.gravity_scale;
     let kinetic = body.kinetic_energy();
     let gravity_energy = -body
+        .state
         .positions
         .iter()
-        .zip(&body.masses)
+        .zip(&body.rest.masses)
         .map(|(x, m)| m * g.dot(*x))
         .sum::<Real>();
-    let elastic = body.state.elastic_energy(&body.positions);
-    let r = &mut body.report;
+    let elastic = body.state.elements.elastic_energy(&body.state.positions);
+    let r = &mut body.last.report;
     r.kinetic_energy = kinetic;
     r.gravity_energy = gravity_energy;
     r.elastic_energy = elastic;
@@ -69,7 +70,7 @@ pub(super) fn energies(body: &mut Deformable, ctx: &StepContext<'_>) {
 
 /// The stage timings, into the report.
 pub(super) fn timings(body: &mut Deformable, times: &StageTimes) {
-    let r = &mut body.report;
+    let r = &mut body.last.report;
     r.time_forces = times.forces;
     r.time_contacts = times.contacts;
     r.time_integrate = times.integrate;
@@ -91,17 +92,17 @@ pub(super) fn send_events(
             .map(|(h, _)| *h),
     );
     sc.now.sort_unstable_by_key(|h| h.into_raw_parts());
-    for c in body.touching.iter().filter(|c| !sc.now.contains(c)) {
+    for c in body.last.touching.iter().filter(|c| !sc.now.contains(c)) {
         events.handle_contact_event(DeformableContactEvent::Stopped {
             deformable: handle,
             collider: *c,
         });
     }
-    for c in sc.now.iter().filter(|c| !body.touching.contains(c)) {
+    for c in sc.now.iter().filter(|c| !body.last.touching.contains(c)) {
         events.handle_contact_event(DeformableContactEvent::Started {
             deformable: handle,
             collider: *c,
         });
     }
-    std::mem::swap(&mut body.touching, &mut sc.now);
+    std::mem::swap(&mut body.last.touching, &mut sc.now);
 }

@@ -36,9 +36,10 @@ mod substep;
 use std::time::Instant;
 
 use super::body::Deformable;
-use super::contact::{Candidate, ContactPoint};
+use super::contact::{Candidate, ContactMaterial, ContactPoint, Scan};
 use super::coupling::{self, BodyMotion, RigidBackup};
 use super::events::DeformableEventHandler;
+use super::integrator::SymplecticEuler;
 use super::math::{Real, Vector};
 use super::rapier::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
 use super::rapier::geometry::{BroadPhaseBvh, ColliderHandle, ColliderSet};
@@ -137,6 +138,8 @@ struct Scratch {
     contacts: Vec<ContactPoint>,
     /// The dynamic bodies a deformable may push this step, as they were before it.
     backup: RigidBackup,
+    /// `pushed.len()` when this body's step began: the bodies after it are this body's.
+    pushed_before: usize,
 }
 
 /// What every phase of one body's step reads.
@@ -151,6 +154,24 @@ struct StepContext<'a> {
     indexed: bool,
     colliders: &'a ColliderSet,
     broad_phase: &'a BroadPhaseBvh,
+}
+
+impl<'a> StepContext<'a> {
+    /// The broad phase's view of the rigid world for one body's contacts.
+    fn scan<'s>(&'s self, bodies: &'s RigidBodySet, material: &'s ContactMaterial) -> Scan<'s>
+    where
+        'a: 's,
+    {
+        Scan {
+            bodies,
+            colliders: self.colliders,
+            broad_phase: self.broad_phase,
+            indexed: self.indexed,
+            material,
+            gravity: self.gravity,
+            dt: self.dt,
+        }
+    }
 }
 
 /// Wall-clock time per stage of one body's step, s.
@@ -254,18 +275,28 @@ impl DeformablePipeline {
         // 1. wake
         if sleep::stays_asleep(body, ctx, bodies, sc) {
             sleep::report_asleep(body, detached);
-            self.report.deformables.push((handle, body.report.clone()));
+            self.report
+                .deformables
+                .push((handle, body.last.report.clone()));
             return;
         }
-        body.report.sleeping = false;
-        if !body.frozen && ctx.dt > 0.0 {
+        body.last.report.sleeping = false;
+        if !body.activation.frozen && ctx.dt > 0.0 {
             let mut times = StageTimes::default();
             // 2. prepare
             let mut candidates = timed(&mut times.contacts, || {
                 prepare::prepare(body, ctx, bodies, sc)
             });
             // 3. substeps
-            let stats = substep::run(body, ctx, bodies, sc, &mut candidates, &mut times);
+            let stats = substep::run(
+                &SymplecticEuler,
+                body,
+                ctx,
+                bodies,
+                sc,
+                &mut candidates,
+                &mut times,
+            );
             let integrate_start = Instant::now();
             // 4. containment
             let quality = containment::contain(body, ctx, bodies, sc);
@@ -277,17 +308,19 @@ impl DeformablePipeline {
             times.integrate = integrate_start.elapsed().as_secs_f64();
             finish::timings(body, &times);
         } else {
-            body.report.substeps = 0;
-            body.report.contacts = 0;
-            body.report.frozen = body.frozen;
+            body.last.report.substeps = 0;
+            body.last.report.contacts = 0;
+            body.last.report.frozen = body.activation.frozen;
             sc.near.clear();
             sc.touched_colliders.clear();
         }
-        body.report.detached = detached;
-        body.report.attached_nodes = body.bindings.len();
+        body.last.report.detached = detached;
+        body.last.report.attached_nodes = body.bindings.len();
         // 7. events
         finish::send_events(handle, body, sc, events);
-        self.report.deformables.push((handle, body.report.clone()));
+        self.report
+            .deformables
+            .push((handle, body.last.report.clone()));
     }
 }
 

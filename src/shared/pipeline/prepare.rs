@@ -42,8 +42,7 @@ pub(super) fn prepare<'a>(
 ) -> Candidates<'a> {
     let dt = ctx.dt;
     let g = ctx.gravity * body.gravity_scale;
-    body.saved_positions.copy_from_slice(&body.positions);
-    body.saved_velocities.copy_from_slice(&body.velocities);
+    body.step.save(&body.state);
 
     // Bodies this deformable is bound to, and how every relevant body moves.
     sc.motions.clear();
@@ -55,19 +54,27 @@ pub(super) fn prepare<'a>(
     }
 
     // Broad phase, once per deformable and then once per surface node.
-    let surface = body.mesh.boundary_nodes();
-    let facets = body.mesh.boundary_facets();
+    let surface = body.rest.mesh.boundary_nodes();
+    let facets = body.rest.mesh.boundary_facets();
     let mut region = Aabb::new_invalid();
     let mut shortest = Real::INFINITY;
     for &i in surface {
         let i = i as usize;
-        swept(&mut region, body.positions[i], body.velocities[i], g, dt);
+        swept(
+            &mut region,
+            body.state.positions[i],
+            body.state.velocities[i],
+            g,
+            dt,
+        );
     }
     for f in facets {
         for a in 0..FACET_ARITY {
             for b in a + 1..FACET_ARITY {
-                shortest = shortest
-                    .min(body.positions[f[a] as usize].distance(body.positions[f[b] as usize]));
+                shortest = shortest.min(
+                    body.state.positions[f[a] as usize]
+                        .distance(body.state.positions[f[b] as usize]),
+                );
             }
         }
     }
@@ -82,15 +89,7 @@ pub(super) fn prepare<'a>(
         + 1e-4;
     let widen = node_margin + ctx.margin;
     let region = region.loosened(widen);
-    let scan = Scan {
-        bodies,
-        colliders: ctx.colliders,
-        broad_phase: ctx.broad_phase,
-        indexed: ctx.indexed,
-        material: &body.contact,
-        gravity: ctx.gravity,
-        dt,
-    };
+    let scan = ctx.scan(bodies, &body.contact);
     contact::near_colliders(&scan, region, &sc.attached_bodies, &mut sc.near);
     let mut candidates: Vec<Candidate<'a>> = Vec::with_capacity(sc.near.len());
     for &h in &sc.near {
@@ -116,8 +115,9 @@ pub(super) fn prepare<'a>(
     sc.touched_colliders.clear();
     sc.touched_colliders.resize(candidates.len(), false);
     sc.backup.save(&sc.motions, bodies);
+    sc.pushed_before = sc.pushed.len();
     tables(body, &scan, &candidates, widen, sc);
-    body.contacts.clear();
+    body.last.contacts.clear();
     candidates
 }
 
@@ -131,7 +131,7 @@ fn tables(
     sc: &mut Scratch,
 ) {
     let (dt, g) = (scan.dt, scan.gravity * body.gravity_scale);
-    let surface = body.mesh.boundary_nodes();
+    let surface = body.rest.mesh.boundary_nodes();
     sc.node_start.clear();
     sc.node_cands.clear();
     sc.node_start.push(0);
@@ -140,8 +140,8 @@ fn tables(
             let mut b = Aabb::new_invalid();
             swept(
                 &mut b,
-                body.positions[i as usize],
-                body.velocities[i as usize],
+                body.state.positions[i as usize],
+                body.state.velocities[i as usize],
                 g,
                 dt,
             );
@@ -153,14 +153,14 @@ fn tables(
     sc.facet_cands.clear();
     sc.facet_start.push(0);
     let with_features = candidates.iter().any(|c| !c.features.is_empty());
-    for f in body.mesh.boundary_facets() {
+    for f in body.rest.mesh.boundary_facets() {
         if with_features && !f.iter().all(|&i| body.is_attached(i)) {
             let mut b = Aabb::new_invalid();
             for &i in f {
                 swept(
                     &mut b,
-                    body.positions[i as usize],
-                    body.velocities[i as usize],
+                    body.state.positions[i as usize],
+                    body.state.velocities[i as usize],
                     g,
                     dt,
                 );

@@ -5,7 +5,7 @@
 //! [`PipelineSettings`]: super::PipelineSettings
 
 use super::super::body::Deformable;
-use super::super::contact::{self, Scan};
+use super::super::contact;
 use super::super::coupling::is_moving;
 use super::super::math::{Real, Vector};
 use super::super::rapier::dynamics::RigidBodySet;
@@ -20,16 +20,17 @@ pub(super) fn stays_asleep(
     bodies: &RigidBodySet,
     sc: &mut Scratch,
 ) -> bool {
-    if body.sleeping && (!body.can_sleep || disturbed(body, ctx, bodies, sc)) {
+    if body.activation.sleeping && (!body.activation.can_sleep || disturbed(body, ctx, bodies, sc))
+    {
         body.wake_up();
     }
-    body.sleeping
+    body.activation.sleeping
 }
 
 /// The report of a body that slept through the step: not simulated, contacts (and so events)
 /// unchanged.
 pub(super) fn report_asleep(body: &mut Deformable, detached: usize) {
-    let r = &mut body.report;
+    let r = &mut body.last.report;
     r.sleeping = true;
     r.substeps = 0;
     r.limiter_substeps = 0;
@@ -56,23 +57,20 @@ fn disturbed(
     {
         return true;
     }
-    if body.touching.iter().any(|c| !ctx.colliders.contains(*c)) {
+    if body
+        .last
+        .touching
+        .iter()
+        .any(|c| !ctx.colliders.contains(*c))
+    {
         return true;
     }
     let mut region = Aabb::new_invalid();
-    for &i in body.mesh.boundary_nodes() {
-        region.take_point(body.positions[i as usize]);
+    for &i in body.rest.mesh.boundary_nodes() {
+        region.take_point(body.state.positions[i as usize]);
     }
     let size = (region.maxs - region.mins).max_element().max(1e-3);
-    let scan = Scan {
-        bodies,
-        colliders: ctx.colliders,
-        broad_phase: ctx.broad_phase,
-        indexed: ctx.indexed,
-        material: &body.contact,
-        gravity: ctx.gravity,
-        dt: ctx.dt,
-    };
+    let scan = ctx.scan(bodies, &body.contact);
     contact::near_colliders(
         &scan,
         region.loosened(ctx.margin + 1e-2 * size),
@@ -103,17 +101,17 @@ pub(super) fn update(
         .motions
         .iter()
         .all(|m| bodies.get(m.handle).is_some_and(|b| !is_moving(b)));
-    let max_speed = (0..body.positions.len())
+    let max_speed = (0..body.state.positions.len())
         .filter(|&i| !body.is_attached(i as u32))
-        .map(|i| body.velocities[i].length())
+        .map(|i| body.state.velocities[i].length())
         .fold(0.0, Real::max);
-    if body.can_sleep && sane && quiet && max_speed < ctx.settings.sleep_speed {
-        body.still_time += ctx.dt;
+    if body.activation.can_sleep && sane && quiet && max_speed < ctx.settings.sleep_speed {
+        body.activation.still_time += ctx.dt;
     } else {
-        body.still_time = 0.0;
+        body.activation.still_time = 0.0;
     }
-    if body.still_time >= ctx.settings.time_until_sleep {
-        body.sleeping = true;
-        body.velocities.fill(Vector::ZERO);
+    if body.activation.still_time >= ctx.settings.time_until_sleep {
+        body.activation.sleeping = true;
+        body.state.velocities.fill(Vector::ZERO);
     }
 }

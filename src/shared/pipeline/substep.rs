@@ -1,12 +1,12 @@
-//! Phase 3 of a body's step: the substep loop (forces, substep size, symplectic Euler, the
-//! bone drive, contacts, positions).
+//! Phase 3 of a body's step: the substep loop (forces, substep size, the integrator's velocity
+//! update, the bone drive, contacts, positions).
 
 use super::super::attach::{self, DrivenNodes};
 use super::super::body::Deformable;
-use super::super::contact::{self, ContactPoint, FacetMotion, FreeNode};
+use super::super::contact::{self, FacetMotion, FreeNode};
 use super::super::coupling::Substep;
+use super::super::integrator::{Bound, Integrate};
 use super::super::math::{Real, Vector, FACET_ARITY};
-use super::super::model::stable_substep;
 use super::super::rapier::dynamics::RigidBodySet;
 use super::{timed, Candidates, Scratch, StageTimes, StepContext};
 
@@ -25,10 +25,10 @@ pub(super) struct SubstepStats {
     pub facet_contacts: usize,
 }
 
-/// The substep size at the current state (the element forces evaluated), or `None` when the
-/// body is out of substeps (`stats` says so).
+/// The substep size at the current state's bound, or `None` when the body is out of substeps
+/// (`stats` says so).
 fn substep_size(
-    body: &Deformable,
+    bound: Bound,
     ctx: &StepContext<'_>,
     remaining: Real,
     stats: &mut SubstepStats,
@@ -37,10 +37,10 @@ fn substep_size(
     if let Some(k) = settings.fixed_substeps {
         return Some(ctx.dt / k.max(1) as Real);
     }
-    let stable =
-        settings.safety * stable_substep(&body.masses, &body.acc.stiffness, &body.acc.damping);
-    let bound = stable.min(body.limiter);
-    if body.limiter < stable {
+    let stable = settings.safety * bound.stable;
+    let limiter = bound.limiter;
+    let bound = stable.min(limiter);
+    if limiter < stable {
         stats.limiter_substeps += 1;
     }
     if stats.substeps + 1 >= settings.max_substeps
@@ -58,8 +58,9 @@ fn substep_size(
     }
 }
 
-/// Runs the substeps of one body's step.
+/// Runs the substeps of one body's step, its velocities advanced by `integrator`.
 pub(super) fn run(
+    integrator: &impl Integrate,
     body: &mut Deformable,
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
@@ -69,7 +70,7 @@ pub(super) fn run(
 ) -> SubstepStats {
     let dt = ctx.dt;
     let g = ctx.gravity * body.gravity_scale;
-    let n = body.positions.len();
+    let n = body.state.positions.len();
     let mut stats = SubstepStats::default();
     // The motions are read all through the loop while the other buffers change.
     let motions = std::mem::take(&mut sc.motions);
@@ -83,16 +84,8 @@ pub(super) fn run(
         } else if remaining <= dt * 1e-6 {
             break;
         }
-        timed(&mut times.forces, || {
-            if !body.forces_valid {
-                body.acc.clear();
-                body.limiter =
-                    body.state
-                        .accumulate(&body.positions, &body.velocities, &mut body.acc);
-                body.forces_valid = true;
-            }
-        });
-        let Some(h) = substep_size(body, ctx, remaining, &mut stats) else {
+        timed(&mut times.forces, || body.refresh_forces());
+        let Some(h) = substep_size(integrator.bound(body), ctx, remaining, &mut stats) else {
             break;
         };
         let at = Substep {
@@ -104,17 +97,17 @@ pub(super) fn run(
             motions: &motions,
         };
 
-        // Symplectic Euler, velocities first.
-        body.scratch_velocities.copy_from_slice(&body.velocities);
-        for i in 0..n {
-            body.velocities[i] += (body.acc.force[i] * body.inv_masses[i] + g) * h;
-        }
+        // Velocities first (the contacts act on them), from the element forces and gravity.
+        body.step
+            .scratch_velocities
+            .copy_from_slice(&body.state.velocities);
+        integrator.advance_velocities(body, g, h);
 
         // Bound nodes follow their bones.
         let nodes = DrivenNodes {
-            positions: &body.positions,
-            velocities: &mut body.velocities,
-            inv_masses: &body.inv_masses,
+            positions: &body.state.positions,
+            velocities: &mut body.state.velocities,
+            inv_masses: &body.rest.inv_masses,
         };
         attach::drive_bones(
             &body.bindings,
@@ -140,10 +133,10 @@ pub(super) fn run(
         }
 
         for i in 0..n {
-            body.positions[i] += body.velocities[i] * h;
+            body.state.positions[i] += body.state.velocities[i] * h;
         }
-        attach::place_on_bones(&body.bindings, &sc.targets, &mut body.positions);
-        body.forces_valid = false;
+        attach::place_on_bones(&body.bindings, &sc.targets, &mut body.state.positions);
+        body.step.forces_valid = false;
         t += h;
         stats.substeps += 1;
     }
@@ -169,7 +162,7 @@ fn node_contacts(
     sc: &mut Scratch,
     candidates: &mut Candidates<'_>,
 ) {
-    let surface = body.mesh.boundary_nodes();
+    let surface = body.rest.mesh.boundary_nodes();
     for j in 0..surface.len() {
         let k = order(backward, surface.len(), j);
         let i = surface[k];
@@ -178,29 +171,23 @@ fn node_contacts(
             continue;
         }
         let n_i = i as usize;
-        let mut x = body.positions[n_i];
+        let mut x = body.state.positions[n_i];
         let node = FreeNode {
             index: i,
-            v: body.velocities[n_i],
-            v_before: body.scratch_velocities[n_i],
-            inv_mass: body.inv_masses[n_i],
+            v: body.state.velocities[n_i],
+            v_before: body.step.scratch_velocities[n_i],
+            inv_mass: body.rest.inv_masses[n_i],
         };
         let Some(mut c) =
             contact::resolve_node(node, &mut x, at, &sc.node_cands[b0..b1], candidates, bodies)
         else {
             continue;
         };
-        body.positions[n_i] = x;
-        c.solve(&mut body.velocities, at, candidates, bodies);
-        contact::refresh_poses(candidates, c.candidate, at.s1, at.dt, at.motions, bodies);
-        c.note_pushed(candidates, at.motions, &mut sc.pushed);
+        body.state.positions[n_i] = x;
+        let v = &mut body.state.velocities;
+        let point = c.settle(v, at, candidates, bodies, &mut sc.pushed, Some(i));
         sc.touched_nodes[k] = true;
-        sc.last_contact[k] = Some(ContactPoint {
-            point: c.point,
-            normal: c.normal,
-            collider: candidates[c.candidate].handle,
-            node: Some(i),
-        });
+        sc.last_contact[k] = Some(point);
         sc.touched_colliders[c.candidate] = true;
     }
 }
@@ -215,7 +202,7 @@ fn facet_contacts(
     sc: &mut Scratch,
     candidates: &mut Candidates<'_>,
 ) -> usize {
-    let facets = body.mesh.boundary_facets();
+    let facets = body.rest.mesh.boundary_facets();
     let h = at.h;
     let mut solved = 0;
     for j in 0..facets.len() {
@@ -230,17 +217,18 @@ fn facet_contacts(
             if body.is_attached(i) {
                 0.0
             } else {
-                body.inv_masses[i as usize]
+                body.rest.inv_masses[i as usize]
             }
         });
-        let x: [Vector; FACET_ARITY] = std::array::from_fn(|a| body.positions[facet[a] as usize]);
+        let x: [Vector; FACET_ARITY] =
+            std::array::from_fn(|a| body.state.positions[facet[a] as usize]);
         // The deepest crossing first, then the next one, with the facet where the last push
         // left it (each push only moves it further in): a flat face brings several features
         // across one facet at once.
         for _ in 0..FACET_PASSES {
             let y: [Vector; FACET_ARITY] = std::array::from_fn(|a| {
                 let i = facet[a] as usize;
-                body.positions[i] + body.velocities[i] * h
+                body.state.positions[i] + body.state.velocities[i] * h
             });
             let motion = FacetMotion {
                 nodes: *facet,
@@ -252,17 +240,11 @@ fn facet_contacts(
             let Some(mut c) = contact::resolve_facet(&motion, at, ids, candidates, bodies) else {
                 break;
             };
-            c.solve(&mut body.velocities, at, candidates, bodies);
-            contact::refresh_poses(candidates, c.candidate, at.s1, at.dt, at.motions, bodies);
-            c.note_pushed(candidates, at.motions, &mut sc.pushed);
-            solved += 1;
-            body.contacts.push(ContactPoint {
-                point: c.point,
-                normal: c.normal,
-                collider: candidates[c.candidate].handle,
-                node: None,
-            });
+            let v = &mut body.state.velocities;
+            let point = c.settle(v, at, candidates, bodies, &mut sc.pushed, None);
+            body.last.contacts.push(point);
             sc.touched_colliders[c.candidate] = true;
+            solved += 1;
         }
     }
     solved

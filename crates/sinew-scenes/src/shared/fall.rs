@@ -8,7 +8,7 @@ use super::super::lib::rapier::geometry::{ColliderBuilder, Cuboid, SharedShape};
 use super::super::lib::BuildError;
 use super::super::lib::DeformableWorld;
 use super::super::lib::Material;
-use super::sim::{BodySpec, Sim};
+use super::sim::{BodySpec, Bounce, Sim};
 use super::subject::Subject;
 use super::Record;
 
@@ -151,27 +151,10 @@ impl FallScene {
     ) -> Result<Record, BuildError> {
         let mut sim = self.sim()?;
         let steps = (self.seconds / self.dt).round().max(1.0) as usize;
-        let mut max_penetration: Real = 0.0;
-        // Phases of the first bounce: falling, rising after the first impact's lowest point,
-        // done at the next turn downwards.
-        let (mut rising, mut apex): (bool, Option<Real>) = (false, None);
-        let mut highest = Real::NEG_INFINITY;
+        let mut bounce = Bounce::new(0.0, self.size);
         for k in 0..steps {
             sim.step();
-            max_penetration = max_penetration.max(-sim.lowest());
-            let com = sim.center_of_mass().dot(UP);
-            let vy = sim.center_of_mass_velocity().dot(UP);
-            if apex.is_none() {
-                if !rising && vy > 0.0 && sim.lowest() < 0.05 * self.size {
-                    rising = true;
-                }
-                if rising {
-                    highest = highest.max(com);
-                    if vy <= 0.0 {
-                        apex = Some(highest);
-                    }
-                }
-            }
+            bounce.observe(&sim);
             if let Some((every, out)) = sample.as_mut() {
                 let t = (k + 1) as f64 * self.dt as f64;
                 let next = (out.len() + 1) as f64 * *every as f64;
@@ -184,18 +167,13 @@ impl FallScene {
                 break;
             }
         }
-        let mut r = sim.record("fall", self.resolution);
-        r.bounce_apex_com = apex.map(|a| a as f64);
-        r.rest_com = Some(sim.center_of_mass().dot(UP) as f64);
-        r.max_penetration = Some(max_penetration as f64);
-        r.failure = crate::record::failure(&[
-            (r.nan, "non-finite state"),
-            (r.exploded, "exploded"),
-            (r.final_inverted_elements > 0, "ended with inverted cells"),
-            (max_penetration > 0.25 * self.size, "sank into the ground"),
-        ]);
-        r.failed = r.failure.is_some();
-        Ok(r)
+        let sank = bounce.max_penetration() > 0.25 * self.size;
+        Ok(bounce.record(
+            &sim,
+            "fall",
+            self.resolution,
+            &[(sank, "sank into the ground")],
+        ))
     }
 
     /// Runs the scene.

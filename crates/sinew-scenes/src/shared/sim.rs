@@ -491,3 +491,69 @@ fn attach_error(e: &AttachError) -> BuildError {
         },
     }
 }
+
+/// The first bounce of a dropped body and its deepest penetration below a floor, followed step
+/// by step: the apex is the highest centre of mass between the first impact's lowest point
+/// (the body rising while within 5 % of its size of the floor) and the next turn downwards.
+pub(crate) struct Bounce {
+    floor: Real,
+    size: Real,
+    rising: bool,
+    highest: Real,
+    apex: Option<Real>,
+    max_penetration: Real,
+}
+
+impl Bounce {
+    pub fn new(floor: Real, size: Real) -> Self {
+        Bounce {
+            floor,
+            size,
+            rising: false,
+            highest: Real::NEG_INFINITY,
+            apex: None,
+            max_penetration: 0.0,
+        }
+    }
+
+    /// The deepest node below the floor so far.
+    pub fn max_penetration(&self) -> Real {
+        self.max_penetration
+    }
+
+    /// Takes the state after a step.
+    pub fn observe(&mut self, sim: &Sim) {
+        let lowest = sim.lowest() - self.floor;
+        self.max_penetration = self.max_penetration.max(-lowest);
+        if self.apex.is_some() {
+            return;
+        }
+        let com = sim.center_of_mass().dot(UP);
+        let vy = sim.center_of_mass_velocity().dot(UP);
+        self.rising |= vy > 0.0 && lowest < 0.05 * self.size;
+        if self.rising {
+            self.highest = self.highest.max(com);
+            if vy <= 0.0 {
+                self.apex = Some(self.highest);
+            }
+        }
+    }
+
+    /// The run's record with the apex, the rest height and the penetration, failed on a
+    /// non-finite state, an explosion, an inverted cell at the end, or the first of `more`.
+    pub fn record(&self, sim: &Sim, scene: &str, res: usize, more: &[(bool, &str)]) -> Record {
+        let mut r = sim.record(scene, res);
+        r.bounce_apex_com = self.apex.map(|a| a as f64);
+        r.rest_com = Some(sim.center_of_mass().dot(UP) as f64);
+        r.max_penetration = Some(self.max_penetration as f64);
+        let mut failures = vec![
+            (r.nan, "non-finite state"),
+            (r.exploded, "exploded"),
+            (r.final_inverted_elements > 0, "ended with inverted cells"),
+        ];
+        failures.extend_from_slice(more);
+        r.failure = crate::record::failure(&failures);
+        r.failed = r.failure.is_some();
+        r
+    }
+}

@@ -20,10 +20,10 @@
 //! assert!((record.rest_com.unwrap() - 0.35).abs() < 0.01); // rests on the floor's top
 //! ```
 
-use super::super::lib::math::{Real, Vector, UP};
+use super::super::lib::math::{Real, Vector};
 use super::super::lib::mesh::Mesh;
 use super::super::lib::{BuildError, DeformableWorld, Material};
-use super::sim::{BodySpec, Sim};
+use super::sim::{BodySpec, Bounce, Sim};
 use super::subject::Subject;
 use super::Record;
 
@@ -86,37 +86,14 @@ impl DropTest {
         spec.restitution = self.restitution;
         let mut sim = Sim::new(self.world, self.subject, spec, size.max(1e-6), None)?;
         let steps = (self.seconds / dt).round().max(1.0) as usize;
-        let floor = self.floor_height;
-        let (mut rising, mut apex, mut highest) = (false, None, Real::NEG_INFINITY);
-        let mut max_penetration: Real = 0.0;
+        let mut bounce = Bounce::new(self.floor_height, size.max(1e-6));
         for _ in 0..steps {
             sim.step();
-            let lowest = sim.lowest() - floor;
-            max_penetration = max_penetration.max(-lowest);
-            let com = sim.center_of_mass().dot(UP);
-            if apex.is_none() {
-                rising |= sim.center_of_mass_velocity().dot(UP) > 0.0 && lowest < 0.05 * size;
-                if rising {
-                    highest = highest.max(com);
-                    if sim.center_of_mass_velocity().dot(UP) <= 0.0 {
-                        apex = Some(highest);
-                    }
-                }
-            }
+            bounce.observe(&sim);
             if sim.exploded() {
                 break;
             }
         }
-        let mut r = sim.record("drop", 0);
-        r.bounce_apex_com = apex.map(|a| a as f64);
-        r.rest_com = Some(sim.center_of_mass().dot(UP) as f64);
-        r.max_penetration = Some(max_penetration as f64);
-        r.failure = crate::record::failure(&[
-            (r.nan, "non-finite state"),
-            (r.exploded, "exploded"),
-            (r.final_inverted_elements > 0, "ended with inverted cells"),
-        ]);
-        r.failed = r.failure.is_some();
-        Ok(r)
+        Ok(bounce.record(&sim, "drop", 0, &[]))
     }
 }

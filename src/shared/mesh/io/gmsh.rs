@@ -33,13 +33,11 @@
 //! ```
 
 use std::collections::HashMap;
-use std::io::{BufRead, Write};
-use std::path::Path;
+use std::io::Write;
 
 use super::super::super::math::{Real, DIM, DIM_NAME};
 use super::super::{CellKind, Mesh};
-use super::{fmt_real, load_path, load_reader, reserve, shorten, xyz, Cursor, Raw, ReadError};
-use super::{Location, MEMORY};
+use super::{fmt_real, reserve, shorten, xyz, Cursor, Location, Raw, ReadError};
 
 /// The `.msh` format version to write.
 #[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Hash)]
@@ -51,22 +49,7 @@ pub enum GmshVersion {
     V2_2,
 }
 
-/// Reads a `.msh` file.
-pub fn read(path: impl AsRef<Path>) -> Result<Mesh, ReadError> {
-    let (file, text) = load_path(path.as_ref())?;
-    parse(&text, &file)
-}
-
-/// Reads `.msh` text; errors name the file `<memory>`.
-pub fn read_str(text: &str) -> Result<Mesh, ReadError> {
-    parse(text, MEMORY)
-}
-
-/// Reads `.msh` text from a reader; errors name the file `<memory>`.
-pub fn read_from(reader: impl BufRead) -> Result<Mesh, ReadError> {
-    let text = load_reader(reader, MEMORY)?;
-    parse(&text, MEMORY)
-}
+one_file_readers!(".msh");
 
 #[derive(Copy, Clone, PartialEq, Eq)]
 enum Version {

@@ -23,6 +23,31 @@
 //! dimension's [`Mesh`] and the element types they take depend on the dimension, so a
 //! dimension-free intermediate form would only add a conversion step.
 
+/// A one-file format's three entry points (`read`, `read_str`, `read_from`), written once over
+/// the format's `parse(text, file)`.
+macro_rules! one_file_readers {
+    ($ext:literal) => {
+        #[doc = concat!("Reads a `", $ext, "` file.")]
+        pub fn read(path: impl AsRef<std::path::Path>) -> Result<Mesh, ReadError> {
+            let (file, text) = super::load_path(path.as_ref())?;
+            parse(&text, &file)
+        }
+
+        #[doc = concat!("Reads `", $ext, "` text; errors name the file `<memory>`.")]
+        pub fn read_str(text: &str) -> Result<Mesh, ReadError> {
+            parse(text, super::MEMORY)
+        }
+
+        #[doc = concat!(
+                    "Reads `", $ext, "` text from a reader; errors name the file `<memory>`."
+                )]
+        pub fn read_from(reader: impl std::io::BufRead) -> Result<Mesh, ReadError> {
+            let text = super::load_reader(reader, super::MEMORY)?;
+            parse(&text, super::MEMORY)
+        }
+    };
+}
+
 pub mod gmsh;
 pub mod tetgen;
 pub mod vtk;

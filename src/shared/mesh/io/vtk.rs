@@ -22,33 +22,14 @@
 //! [`write()`] produces version 3.0 (classic `CELLS`), points as `float` written so that they
 //! read back exactly (z = 0 in 2D).
 
-use std::io::{BufRead, Write};
-use std::path::Path;
+use std::io::Write;
 
 use super::super::super::math::{Real, DIM, DIM_NAME};
 use super::super::cube::{bits_to_vtk, vtk_to_bits, CUBE_ARITY};
 use super::super::{CellKind, Mesh};
-use super::{
-    fmt_real, load_path, load_reader, plural, reserve, shorten, xyz, Cursor, Location, Raw,
-    ReadError, MEMORY,
-};
+use super::{fmt_real, plural, reserve, shorten, xyz, Cursor, Location, Raw, ReadError};
 
-/// Reads a `.vtk` file.
-pub fn read(path: impl AsRef<Path>) -> Result<Mesh, ReadError> {
-    let (file, text) = load_path(path.as_ref())?;
-    parse(&text, &file)
-}
-
-/// Reads `.vtk` text; errors name the file `<memory>`.
-pub fn read_str(text: &str) -> Result<Mesh, ReadError> {
-    parse(text, MEMORY)
-}
-
-/// Reads `.vtk` text from a reader; errors name the file `<memory>`.
-pub fn read_from(reader: impl BufRead) -> Result<Mesh, ReadError> {
-    let text = load_reader(reader, MEMORY)?;
-    parse(&text, MEMORY)
-}
+one_file_readers!(".vtk");
 
 const SUPPORTED: &str = "legacy ASCII 1.0 to 5.1";
 const HEADER: &str = "# vtk DataFile Version";

@@ -1,0 +1,301 @@
+//! [`DeformableBuilder`]: a named constructor, `mut self -> Self` setters, a validating build.
+
+use super::super::attach::Bindings;
+use super::super::contact::ContactMaterial;
+use super::super::error::BuildError;
+use super::super::material::{Material, Resolved, Stiffness};
+use super::super::math::{Real, Rotation, Vector, DIM};
+use super::super::mesh::{CellKind, Mesh};
+use super::super::model::{Accumulator, ElementModel, ModelState};
+use super::super::rapier::dynamics::CoefficientCombineRule;
+use super::super::rapier::geometry::InteractionGroups;
+use super::super::report::DeformableReport;
+use super::{Activation, Deformable, LastStep, Rest, State, StepBuffers};
+
+enum Source {
+    Mesh(Mesh),
+    Cuboid {
+        half_extents: Vector,
+        resolution: [usize; DIM],
+    },
+}
+
+/// Builds a [`Deformable`], rapier-style: a named constructor, then `mut self -> Self`
+/// setters, then [`DeformableBuilder::build`], which validates everything and returns a
+/// typed [`BuildError`] instead of panicking.
+#[must_use = "a builder does nothing until `.build()` is called"]
+pub struct DeformableBuilder {
+    source: Source,
+    cells: CellKind,
+    model: ElementModel,
+    material: Material,
+    stiffness: Stiffness,
+    translation: Vector,
+    rotation: Rotation,
+    linvel: Vector,
+    friction: Real,
+    restitution: Real,
+    friction_combine_rule: CoefficientCombineRule,
+    restitution_combine_rule: CoefficientCombineRule,
+    gravity_scale: Real,
+    groups: InteractionGroups,
+    ignore_attached_bodies: bool,
+    can_sleep: bool,
+    deny_warnings: bool,
+    user_data: u128,
+}
+
+impl DeformableBuilder {
+    /// A deformable over an existing rest mesh.
+    pub fn new(mesh: Mesh) -> Self {
+        Self::with_source(Source::Mesh(mesh))
+    }
+
+    /// A box lattice `[-half_extents, half_extents]` with `resolution[d]` nodes along axis `d`
+    /// (see [`Mesh::cuboid`]); simplex cells unless [`DeformableBuilder::cells`] says otherwise.
+    pub fn cuboid(half_extents: Vector, resolution: [usize; DIM]) -> Self {
+        Self::with_source(Source::Cuboid {
+            half_extents,
+            resolution,
+        })
+    }
+
+    fn with_source(source: Source) -> Self {
+        DeformableBuilder {
+            source,
+            cells: CellKind::Simplex,
+            model: ElementModel::EdgeRepulsion,
+            material: Material::default(),
+            stiffness: Stiffness::FromMaterial,
+            translation: Vector::ZERO,
+            rotation: Rotation::IDENTITY,
+            linvel: Vector::ZERO,
+            friction: 0.5,
+            restitution: 0.0,
+            friction_combine_rule: CoefficientCombineRule::Average,
+            restitution_combine_rule: CoefficientCombineRule::Average,
+            gravity_scale: 1.0,
+            groups: InteractionGroups::all(),
+            ignore_attached_bodies: true,
+            can_sleep: true,
+            deny_warnings: false,
+            user_data: 0,
+        }
+    }
+
+    /// Cell kind of a [`DeformableBuilder::cuboid`] lattice (ignored for an explicit mesh).
+    pub fn cells(mut self, kind: CellKind) -> Self {
+        self.cells = kind;
+        self
+    }
+
+    /// The element model (default: [`ElementModel::EdgeRepulsion`]).
+    pub fn model(mut self, model: ElementModel) -> Self {
+        self.model = model;
+        self
+    }
+
+    /// The material (default: [`Material::default`]).
+    pub fn material(mut self, material: Material) -> Self {
+        self.material = material;
+        self
+    }
+
+    /// The stiffness form (default: from the material).
+    pub fn stiffness(mut self, stiffness: Stiffness) -> Self {
+        self.stiffness = stiffness;
+        self
+    }
+
+    /// Translation applied to the rest mesh.
+    pub fn translation(mut self, translation: Vector) -> Self {
+        self.translation = translation;
+        self
+    }
+
+    /// Rotation applied to the rest mesh (about the mesh origin, before the translation).
+    pub fn rotation(mut self, rotation: Rotation) -> Self {
+        self.rotation = rotation;
+        self
+    }
+
+    /// Initial velocity of every node.
+    pub fn linvel(mut self, linvel: Vector) -> Self {
+        self.linvel = linvel;
+        self
+    }
+
+    /// Friction coefficient against colliders (default 0.5), combined with the collider's.
+    pub fn friction(mut self, friction: Real) -> Self {
+        self.friction = friction;
+        self
+    }
+
+    /// Restitution coefficient against colliders (default 0), combined with the collider's.
+    pub fn restitution(mut self, restitution: Real) -> Self {
+        self.restitution = restitution;
+        self
+    }
+
+    /// Rule combining the friction coefficients (rapier's; default average).
+    pub fn friction_combine_rule(mut self, rule: CoefficientCombineRule) -> Self {
+        self.friction_combine_rule = rule;
+        self
+    }
+
+    /// Rule combining the restitution coefficients (rapier's; default average).
+    pub fn restitution_combine_rule(mut self, rule: CoefficientCombineRule) -> Self {
+        self.restitution_combine_rule = rule;
+        self
+    }
+
+    /// Multiplier of gravity for this body (default 1).
+    pub fn gravity_scale(mut self, scale: Real) -> Self {
+        self.gravity_scale = scale;
+        self
+    }
+
+    /// Which colliders this body may touch (rapier's collision groups).
+    pub fn collision_groups(mut self, groups: InteractionGroups) -> Self {
+        self.groups = groups;
+        self
+    }
+
+    /// Whether contacts ignore the colliders of the bodies this deformable is bound to
+    /// (default `true`: tissue skinned onto a bone overlaps it by construction).
+    pub fn ignore_attached_bodies(mut self, ignore: bool) -> Self {
+        self.ignore_attached_bodies = ignore;
+        self
+    }
+
+    /// Whether [`Mesh::diagnose`]'s warnings (coincident nodes, a surface that is not
+    /// manifold, separate pieces) are errors ([`BuildError::MeshWarning`], the first one
+    /// found); default `false`: they are legal, and a cut mesh may be meant.
+    pub fn deny_warnings(mut self, deny: bool) -> Self {
+        self.deny_warnings = deny;
+        self
+    }
+
+    /// Whether the body may fall asleep when it rests (default `true`, as rapier's bodies;
+    /// thresholds in [`PipelineSettings`](super::PipelineSettings)).
+    pub fn can_sleep(mut self, can_sleep: bool) -> Self {
+        self.can_sleep = can_sleep;
+        self
+    }
+
+    /// Free user data.
+    pub fn user_data(mut self, data: u128) -> Self {
+        self.user_data = data;
+        self
+    }
+
+    /// Validates everything and builds the deformable.
+    pub fn build(self) -> Result<Deformable, BuildError> {
+        let mesh = match self.source {
+            Source::Mesh(m) => m,
+            Source::Cuboid {
+                half_extents,
+                resolution,
+            } => Mesh::cuboid(half_extents, resolution, self.cells)?,
+        };
+        if self.deny_warnings {
+            if let Some(w) = mesh.diagnose().into_iter().next() {
+                return Err(BuildError::MeshWarning(w));
+            }
+        }
+        let params = Resolved::new(self.material, self.stiffness)?;
+        let finite = |name, v: Vector| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(BuildError::InvalidParameter {
+                    name,
+                    value: (0..DIM)
+                        .map(|d| v[d])
+                        .find(|c| !c.is_finite())
+                        .unwrap_or(Real::NAN),
+                    expected: "finite components",
+                })
+            }
+        };
+        finite("translation", self.translation)?;
+        finite("linvel", self.linvel)?;
+        let range = |name, v: Real, lo: Real, hi: Real, expected| {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(BuildError::InvalidParameter {
+                    name,
+                    value: v,
+                    expected,
+                })
+            }
+        };
+        range(
+            "friction",
+            self.friction,
+            0.0,
+            Real::MAX,
+            "a non-negative finite coefficient",
+        )?;
+        range("restitution", self.restitution, 0.0, 1.0, "0 ≤ e ≤ 1")?;
+        range(
+            "gravity_scale",
+            self.gravity_scale,
+            -Real::MAX,
+            Real::MAX,
+            "a finite scale",
+        )?;
+        let rotation = self.rotation.normalize();
+        if !rotation.is_finite() {
+            return Err(BuildError::InvalidParameter {
+                name: "rotation",
+                value: Real::NAN,
+                expected: "a finite rotation",
+            });
+        }
+
+        let n = mesh.nodes().len();
+        let rest = Rest::new(mesh, self.model, params);
+        let elements =
+            ModelState::build(self.model, &rest.mesh, &rest.masses, &rest.params, rotation)?;
+        let positions: Vec<Vector> = rest
+            .mesh
+            .nodes()
+            .iter()
+            .map(|p| rotation * *p + self.translation)
+            .collect();
+        let state = State {
+            positions,
+            velocities: vec![self.linvel; n],
+            elements,
+        };
+        let last = LastStep {
+            report: DeformableReport {
+                nodes: n,
+                elements: rest.mesh.num_cells(),
+                min_volume_ratio: 1.0,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        Ok(Deformable {
+            step: StepBuffers::new(Accumulator::new(n), false, Real::INFINITY, &state),
+            state,
+            rest,
+            activation: Activation::awake(self.can_sleep),
+            last,
+            bindings: Bindings::new(n),
+            contact: ContactMaterial {
+                friction: self.friction,
+                restitution: self.restitution,
+                friction_combine_rule: self.friction_combine_rule,
+                restitution_combine_rule: self.restitution_combine_rule,
+                groups: self.groups,
+                ignore_attached_bodies: self.ignore_attached_bodies,
+            },
+            gravity_scale: self.gravity_scale,
+            user_data: self.user_data,
+        })
+    }
+}

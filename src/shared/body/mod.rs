@@ -1,0 +1,387 @@
+//! A deformable body: rest mesh, element model and struct-of-arrays node state.
+
+use super::attach::{self, AttachError, Attachment, Bindings};
+use super::contact::{ContactMaterial, ContactPoint};
+use super::error::BuildError;
+use super::material::{Material, Stiffness};
+use super::math::{self, AngVector, Real, Vector, DIM};
+use super::mesh::Mesh;
+use super::model::{Accumulator, ElementModel};
+use super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
+use super::rapier::geometry::{ColliderHandle, ColliderSet};
+use super::report::DeformableReport;
+
+mod builder;
+mod parts;
+
+pub use builder::DeformableBuilder;
+pub(crate) use parts::{Activation, LastStep, Rest, State, StepBuffers};
+
+/// A deformable body.
+///
+/// Node state is kept as separate arrays (positions, velocities, masses), so the element loops
+/// stream through memory. Build one with [`DeformableBuilder`].
+#[derive(Clone, Debug)]
+pub struct Deformable {
+    pub(crate) rest: Rest,
+    pub(crate) state: State,
+    pub(crate) step: StepBuffers,
+    pub(crate) activation: Activation,
+    pub(crate) last: LastStep,
+    /// Nodes bound to rigid bodies.
+    pub(crate) bindings: Bindings,
+    pub(crate) contact: ContactMaterial,
+    pub(crate) gravity_scale: Real,
+    /// Free for the user.
+    pub user_data: u128,
+}
+
+impl Deformable {
+    /// The largest stable substep (s) at the current state, from the same bound the pipeline
+    /// uses before its `safety` factor: the state is not changed (a copy of the element state
+    /// is evaluated).
+    pub fn stable_substep(&self) -> Real {
+        let mut state = self.state.elements.clone();
+        let mut acc = Accumulator::new(self.state.positions.len());
+        let limiter = state.accumulate(&self.state.positions, &self.state.velocities, &mut acc);
+        super::model::stable_substep(&self.rest.masses, &acc.stiffness, &acc.damping).min(limiter)
+    }
+
+    /// The rest mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.rest.mesh
+    }
+
+    /// The element model.
+    pub fn model(&self) -> ElementModel {
+        self.rest.model
+    }
+
+    /// The material.
+    pub fn material(&self) -> Material {
+        self.rest.params.material
+    }
+
+    /// The stiffness form.
+    pub fn stiffness(&self) -> Stiffness {
+        self.rest.params.stiffness
+    }
+
+    /// Node positions.
+    pub fn positions(&self) -> &[Vector] {
+        &self.state.positions
+    }
+
+    /// Node velocities.
+    pub fn velocities(&self) -> &[Vector] {
+        &self.state.velocities
+    }
+
+    /// Node masses (lumped: each cell's mass shared equally by its vertices).
+    pub fn masses(&self) -> &[Real] {
+        &self.rest.masses
+    }
+
+    /// Number of nodes.
+    pub fn num_nodes(&self) -> usize {
+        self.state.positions.len()
+    }
+
+    /// Total mass.
+    pub fn total_mass(&self) -> Real {
+        self.rest.masses.iter().sum()
+    }
+
+    /// Centre of mass.
+    pub fn center_of_mass(&self) -> Vector {
+        let mut s = Vector::ZERO;
+        for (x, m) in self.state.positions.iter().zip(&self.rest.masses) {
+            s += *x * *m;
+        }
+        s / self.total_mass()
+    }
+
+    /// Velocity of the centre of mass.
+    pub fn center_of_mass_velocity(&self) -> Vector {
+        self.linear_momentum() / self.total_mass()
+    }
+
+    /// Total linear momentum `Σ m v`.
+    pub fn linear_momentum(&self) -> Vector {
+        let mut s = Vector::ZERO;
+        for (v, m) in self.state.velocities.iter().zip(&self.rest.masses) {
+            s += *v * *m;
+        }
+        s
+    }
+
+    /// Total angular momentum about the origin `Σ x × m v`.
+    pub fn angular_momentum(&self) -> AngVector {
+        let mut s = math::ANG_ZERO;
+        for ((x, v), m) in self
+            .state
+            .positions
+            .iter()
+            .zip(&self.state.velocities)
+            .zip(&self.rest.masses)
+        {
+            s += math::cross(*x, *v * *m);
+        }
+        s
+    }
+
+    /// Kinetic energy `Σ ½ m v²`.
+    pub fn kinetic_energy(&self) -> Real {
+        self.state
+            .velocities
+            .iter()
+            .zip(&self.rest.masses)
+            .map(|(v, m)| 0.5 * m * v.length_squared())
+            .sum()
+    }
+
+    /// Elastic energy stored in the elements.
+    pub fn elastic_energy(&self) -> Real {
+        self.state.elements.elastic_energy(&self.state.positions)
+    }
+
+    /// Number of cells that are collapsed or inverted now (quality ≤ 0).
+    pub fn inverted_elements(&self) -> usize {
+        (0..self.rest.mesh.num_cells())
+            .filter(|&c| self.rest.mesh.cell_quality(c, &self.state.positions) <= 0.0)
+            .count()
+    }
+
+    /// The smallest cell quality (volume ratio) now.
+    pub fn min_volume_ratio(&self) -> Real {
+        (0..self.rest.mesh.num_cells())
+            .map(|c| self.rest.mesh.cell_quality(c, &self.state.positions))
+            .fold(Real::INFINITY, Real::min)
+    }
+
+    /// The element (internal) forces at the current state, without gravity or contacts.
+    ///
+    /// For the shape-based model this also advances its warm-started rotation estimates, as a
+    /// substep would.
+    pub fn element_forces(&mut self) -> &[Vector] {
+        self.step.forces_valid = false;
+        self.refresh_forces();
+        &self.step.acc.force
+    }
+
+    /// Evaluates the element forces (with their per-node stiffness and damping bounds and the
+    /// crossing limiter) if the state changed since they last were: the elements' side of the
+    /// integrator seam (see `integrator.rs`).
+    pub(crate) fn refresh_forces(&mut self) {
+        if self.step.forces_valid {
+            return;
+        }
+        let step = &mut self.step;
+        step.acc.clear();
+        step.limiter = self.state.elements.accumulate(
+            &self.state.positions,
+            &self.state.velocities,
+            &mut step.acc,
+        );
+        step.forces_valid = true;
+    }
+
+    /// The element forces the last substep used, evaluated at the positions that substep
+    /// started from (zero before the first step); without gravity or contacts. Unlike
+    /// [`Deformable::element_forces`] this changes nothing.
+    pub fn last_element_forces(&self) -> &[Vector] {
+        &self.step.acc.force
+    }
+
+    /// The contacts of the last step: for each surface node that touched a collider, its last
+    /// contact, then each facet contact (a rigid feature pressing a surface facet).
+    pub fn contacts(&self) -> &[ContactPoint] {
+        &self.last.contacts
+    }
+
+    /// The report of the last step.
+    pub fn report(&self) -> &DeformableReport {
+        &self.last.report
+    }
+
+    /// Whether the body is frozen (after its state turned non-finite). A frozen body is not
+    /// simulated; [`Deformable::unfreeze`] resumes it.
+    pub fn is_frozen(&self) -> bool {
+        self.activation.frozen
+    }
+
+    /// Resumes a frozen body.
+    pub fn unfreeze(&mut self) {
+        self.activation.frozen = false;
+        self.step.forces_valid = false;
+    }
+
+    /// Whether the body is asleep: it rested long enough with nothing moving near it, and is
+    /// not simulated until a bone it is bound to moves, a moving or awake dynamic body comes
+    /// near it, or [`Deformable::wake_up`] (or any setter of its state) is called.
+    pub fn is_sleeping(&self) -> bool {
+        self.activation.sleeping
+    }
+
+    /// Wakes the body up (and restarts its still-time count).
+    pub fn wake_up(&mut self) {
+        self.activation.sleeping = false;
+        self.activation.still_time = 0.0;
+    }
+
+    /// Whether the body may fall asleep (see [`DeformableBuilder::can_sleep`]).
+    pub fn can_sleep(&self) -> bool {
+        self.activation.can_sleep
+    }
+
+    /// Allows or forbids sleeping; forbidding it wakes the body.
+    pub fn set_can_sleep(&mut self, can_sleep: bool) {
+        self.activation.can_sleep = can_sleep;
+        if !can_sleep {
+            self.wake_up();
+        }
+    }
+
+    /// Sets all node positions. Errors if the count differs or a coordinate is not finite; the
+    /// state is unchanged then.
+    pub fn set_positions(&mut self, positions: &[Vector]) -> Result<(), BuildError> {
+        check_state("positions", positions, self.state.positions.len())?;
+        self.state.positions.copy_from_slice(positions);
+        self.step.forces_valid = false;
+        self.wake_up();
+        Ok(())
+    }
+
+    /// Sets all node velocities. Errors if the count differs or a component is not finite; the
+    /// state is unchanged then.
+    pub fn set_velocities(&mut self, velocities: &[Vector]) -> Result<(), BuildError> {
+        check_state("velocities", velocities, self.state.velocities.len())?;
+        self.state.velocities.copy_from_slice(velocities);
+        self.step.forces_valid = false;
+        self.wake_up();
+        Ok(())
+    }
+
+    /// Gives every node the same velocity.
+    pub fn set_uniform_velocity(&mut self, velocity: Vector) -> Result<(), BuildError> {
+        check_state("velocity", &[velocity], 1)?;
+        self.state.velocities.fill(velocity);
+        self.step.forces_valid = false;
+        self.wake_up();
+        Ok(())
+    }
+
+    /// The current bindings, in the order they were made.
+    pub fn attachments(&self) -> &[Attachment] {
+        self.bindings.list()
+    }
+
+    /// Whether a node is bound to a body.
+    pub fn is_attached(&self, node: u32) -> bool {
+        self.bindings.is_bound(node)
+    }
+
+    /// Binds `nodes` to `body` at their current positions (re-binding nodes already bound
+    /// elsewhere). Returns how many nodes were bound. Nothing changes on error.
+    pub fn attach_nodes(
+        &mut self,
+        bodies: &RigidBodySet,
+        body: RigidBodyHandle,
+        nodes: &[u32],
+    ) -> Result<usize, AttachError> {
+        let rb = bodies.get(body).ok_or(AttachError::NoSuchBody(body))?;
+        if let Some(&node) = nodes
+            .iter()
+            .find(|&&n| n as usize >= self.state.positions.len())
+        {
+            return Err(AttachError::NodeOutOfRange {
+                node,
+                nodes: self.state.positions.len(),
+            });
+        }
+        self.bindings
+            .bind(body, rb.position(), &self.state.positions, nodes);
+        self.bindings_changed();
+        Ok(nodes.len())
+    }
+
+    /// Binds every node inside `collider`, or within `tolerance` of it, to the collider's
+    /// parent body — how tissue is skinned onto a bone. Returns how many nodes were bound.
+    pub fn attach_nodes_inside(
+        &mut self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        collider: ColliderHandle,
+        tolerance: Real,
+    ) -> Result<usize, AttachError> {
+        if !(tolerance.is_finite() && tolerance >= 0.0) {
+            return Err(AttachError::BadTolerance(tolerance));
+        }
+        let co = colliders
+            .get(collider)
+            .ok_or(AttachError::NoSuchCollider(collider))?;
+        let body = co
+            .parent()
+            .ok_or(AttachError::ColliderWithoutBody(collider))?;
+        let nodes = attach::nodes_inside(co, &self.state.positions, tolerance);
+        self.attach_nodes(bodies, body, &nodes)
+    }
+
+    /// Unbinds the given nodes (those not bound are ignored). Returns how many were unbound.
+    pub fn detach_nodes(&mut self, nodes: &[u32]) -> usize {
+        if nodes.is_empty() || self.bindings.len() == 0 {
+            return 0;
+        }
+        let dropped = self.bindings.unbind(nodes);
+        self.bindings_changed();
+        dropped
+    }
+
+    /// Unbinds every node bound to `body`. Returns how many were unbound.
+    pub fn detach_body(&mut self, body: RigidBodyHandle) -> usize {
+        let dropped = self.bindings.retain(|a| a.body != body);
+        self.bindings_changed();
+        dropped
+    }
+
+    /// Unbinds every node.
+    pub fn detach_all(&mut self) {
+        self.bindings.retain(|_| false);
+        self.bindings_changed();
+    }
+
+    /// Drops bindings to bodies no longer in the set; returns how many.
+    pub(crate) fn prune_attachments(&mut self, bodies: &RigidBodySet) -> usize {
+        let dropped = self.bindings.retain(|a| bodies.contains(a.body));
+        if dropped > 0 {
+            self.bindings_changed();
+        }
+        dropped
+    }
+
+    fn bindings_changed(&mut self) {
+        self.step.forces_valid = false;
+        self.wake_up();
+    }
+}
+
+pub(crate) fn check_state(
+    what: &'static str,
+    values: &[Vector],
+    expected: usize,
+) -> Result<(), BuildError> {
+    if values.len() != expected {
+        return Err(BuildError::WrongLength {
+            what,
+            got: values.len(),
+            expected,
+        });
+    }
+    if let Some((node, p)) = values.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+        return Err(BuildError::NonFiniteCoordinate {
+            node,
+            coordinates: (0..DIM).map(|d| p[d]).collect(),
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,135 @@
+//! The component groups a [`Deformable`](super::Deformable) is made of, as rapier groups a
+//! `RigidBody`'s: what it is made of (fixed after build), its state, the step's working
+//! buffers, whether it is simulated, and what the last step found.
+
+use super::super::contact::ContactPoint;
+use super::super::material::Resolved;
+use super::super::math::{Real, Vector};
+use super::super::mesh::Mesh;
+use super::super::model::{Accumulator, ElementModel, ModelState};
+use super::super::rapier::geometry::ColliderHandle;
+use super::super::report::DeformableReport;
+
+/// What the body is made of: the rest mesh, the element model, the material and the lumped
+/// node masses. Fixed after build.
+#[derive(Clone, Debug)]
+pub(crate) struct Rest {
+    pub mesh: Mesh,
+    pub model: ElementModel,
+    pub params: Resolved,
+    /// Lumped node masses: each cell's mass shared equally by its vertices.
+    pub masses: Vec<Real>,
+    /// Their inverses.
+    pub inv_masses: Vec<Real>,
+}
+
+impl Rest {
+    /// Lumps the masses. The builder and a snapshot both come here, so a restored body's
+    /// masses are the built body's bit for bit.
+    pub fn new(mesh: Mesh, model: ElementModel, params: Resolved) -> Rest {
+        let arity = mesh.kind().arity() as Real;
+        let mut masses = vec![0.0; mesh.nodes().len()];
+        for (cell, ids) in mesh.cells().enumerate() {
+            let m = params.material.density * mesh.rest_volumes()[cell] / arity;
+            for &i in ids {
+                masses[i as usize] += m;
+            }
+        }
+        let inv_masses = masses.iter().map(|m| 1.0 / m).collect();
+        Rest {
+            mesh,
+            model,
+            params,
+            masses,
+            inv_masses,
+        }
+    }
+}
+
+/// The body's state: node positions and velocities, and the element model's own state (its
+/// rest data per cell and, for shape matching, the warm-started rotations).
+#[derive(Clone, Debug)]
+pub(crate) struct State {
+    pub positions: Vec<Vector>,
+    pub velocities: Vec<Vector>,
+    pub elements: ModelState,
+}
+
+/// The step's working buffers: the element forces and their stability data, and the copies
+/// a rolled-back step restores.
+#[derive(Clone, Debug)]
+pub(crate) struct StepBuffers {
+    /// Element forces, stiffness and damping per node.
+    pub acc: Accumulator,
+    /// Whether `acc` holds the forces at the current state.
+    pub forces_valid: bool,
+    /// The crossing limiter's bound at the current state.
+    pub limiter: Real,
+    /// The state at the start of the step (a failed step comes back to it).
+    pub saved_positions: Vec<Vector>,
+    pub saved_velocities: Vec<Vector>,
+    /// Velocities before the substep's contacts.
+    pub scratch_velocities: Vec<Vector>,
+}
+
+impl StepBuffers {
+    pub fn new(acc: Accumulator, forces_valid: bool, limiter: Real, state: &State) -> Self {
+        StepBuffers {
+            acc,
+            forces_valid,
+            limiter,
+            saved_positions: state.positions.clone(),
+            saved_velocities: state.velocities.clone(),
+            scratch_velocities: state.velocities.clone(),
+        }
+    }
+}
+
+impl StepBuffers {
+    /// Keeps the state a failed step comes back to.
+    pub fn save(&mut self, state: &State) {
+        self.saved_positions.copy_from_slice(&state.positions);
+        self.saved_velocities.copy_from_slice(&state.velocities);
+    }
+
+    /// Puts the saved state back; the element forces are stale then.
+    pub fn restore(&mut self, state: &mut State) {
+        state.positions.copy_from_slice(&self.saved_positions);
+        state.velocities.copy_from_slice(&self.saved_velocities);
+        self.forces_valid = false;
+    }
+}
+
+/// Whether the body is simulated: asleep, frozen after a non-finite state, or awake.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Activation {
+    /// Whether the body may fall asleep.
+    pub can_sleep: bool,
+    /// Whether the body is asleep (not simulated until something disturbs it).
+    pub sleeping: bool,
+    /// How long the body has been still, s.
+    pub still_time: Real,
+    /// Frozen after its state turned non-finite; not simulated until unfrozen.
+    pub frozen: bool,
+}
+
+impl Activation {
+    pub fn awake(can_sleep: bool) -> Self {
+        Activation {
+            can_sleep,
+            sleeping: false,
+            still_time: 0.0,
+            frozen: false,
+        }
+    }
+}
+
+/// What the last step found.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LastStep {
+    pub report: DeformableReport,
+    /// One per touching surface node, plus facet contacts.
+    pub contacts: Vec<ContactPoint>,
+    /// Colliders touched, sorted.
+    pub touching: Vec<ColliderHandle>,
+}
