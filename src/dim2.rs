@@ -52,6 +52,15 @@ pub mod math {
         det(&[p[1] - p[0], p[2] - p[0]]) / DIM_FACTORIAL
     }
 
+    /// A surface facet as a parry shape (a segment).
+    pub type FacetShape = rapier2d::parry::shape::Segment;
+
+    /// The facet through `p` as a parry shape.
+    #[inline]
+    pub fn facet_shape(p: &[Vector]) -> FacetShape {
+        rapier2d::parry::shape::Segment::new(p[0], p[1])
+    }
+
     /// Unnormalised normal of a facet (an edge `p0 → p1`): the edge turned a quarter to
     /// the left.
     #[inline]
@@ -179,6 +188,19 @@ pub mod math {
         let n = poly.points().len();
         let edges = (0..n).map(|i| [i, (i + 1) % n]).collect();
         Some((poly.points().to_vec(), edges))
+    }
+
+    /// A convex polygon's edge lines: outward unit normal `n` and offset `d`, the inside being
+    /// `n·x ≤ d` for every edge.
+    pub fn convex_planes(shape: &dyn rapier2d::geometry::Shape) -> Option<Vec<(Vector, Real)>> {
+        let poly = shape.as_convex_polygon()?;
+        Some(
+            poly.points()
+                .iter()
+                .zip(poly.normals())
+                .map(|(p, n)| (*n, n.dot(*p)))
+                .collect(),
+        )
     }
 
     /// A rotation angle in the x-y plane, as an angular quantity.

@@ -54,6 +54,15 @@ pub mod math {
         det(&[p[1] - p[0], p[2] - p[0], p[3] - p[0]]) / DIM_FACTORIAL
     }
 
+    /// A surface facet as a parry shape (a triangle).
+    pub type FacetShape = rapier3d::parry::shape::Triangle;
+
+    /// The facet through `p` as a parry shape.
+    #[inline]
+    pub fn facet_shape(p: &[Vector]) -> FacetShape {
+        rapier3d::parry::shape::Triangle::new(p[0], p[1], p[2])
+    }
+
     /// Unnormalised normal of a facet (a triangle): `(p1 - p0) × (p2 - p0)`.
     #[inline]
     pub fn facet_normal(p: &[Vector]) -> Vector {
@@ -247,6 +256,22 @@ pub mod math {
             .map(|e| [e.vertices[0] as usize, e.vertices[1] as usize])
             .collect();
         Some((poly.points().to_vec(), edges))
+    }
+
+    /// A convex polyhedron's face planes: outward unit normal `n` and offset `d`, the inside
+    /// being `n·x ≤ d` for every face.
+    pub fn convex_planes(shape: &dyn rapier3d::geometry::Shape) -> Option<Vec<(Vector, Real)>> {
+        let poly = shape.as_convex_polyhedron()?;
+        let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
+        Some(
+            poly.faces()
+                .iter()
+                .map(|f| {
+                    let p = points[adj[f.first_vertex_or_edge as usize] as usize];
+                    (f.normal, f.normal.dot(p))
+                })
+                .collect(),
+        )
     }
 
     /// A rotation angle about the axis normal to the x-y plane, as an angular quantity.

@@ -34,6 +34,8 @@ pub(crate) struct Substep<'a> {
     pub s1: Real,
     pub dt: Real,
     pub restitution_threshold: Real,
+    /// How far off a two-sided surface (an open trimesh, a heightfield) nodes are kept.
+    pub skin: Real,
     pub motions: &'a [BodyMotion],
 }
 
@@ -173,6 +175,9 @@ pub(crate) fn apply_impulse(
     elapsed: Real,
 ) {
     let (v0, w0) = (body.linvel(), body.angvel());
+    // A strong wake-up, as rapier's contacts keep the bodies of an awake island awake: a body
+    // touching an awake deformable does not fall asleep on its own; it sleeps with the
+    // deformable (`pipeline/sleep.rs`).
     body.apply_impulse_at_point(impulse, point, true);
     if keep_path && elapsed > 0.0 {
         let change = RigidBodyVelocity::new(body.linvel() - v0, body.angvel() - w0);
@@ -195,6 +200,23 @@ pub(crate) fn is_moving(body: &RigidBody) -> bool {
         }
         _ => !body.is_sleeping(),
     }
+}
+
+/// Whether a rigid body keeps a deformable near it awake: a moving kinematic body, or a
+/// dynamic one that will leave rapier's step faster than rapier lets a body fall asleep at (its
+/// activation's linear and angular thresholds; the velocity counted is the present one plus
+/// [`rapier_drift`]: a body the contacts hold at rest has `−drift` until rapier's step). A
+/// slow dynamic body resting on a deformable sleeps with it.
+pub(crate) fn is_restless(body: &RigidBody, gravity: Vector, dt: Real) -> bool {
+    if !body.is_dynamic() {
+        return is_moving(body);
+    }
+    if body.is_sleeping() {
+        return false;
+    }
+    let a = body.activation();
+    (body.linvel() + rapier_drift(body, gravity, dt)).length() > a.normalized_linear_threshold
+        || math::ang_norm(body.angvel()) > a.angular_threshold
 }
 
 /// How far any collider attached to a moving body may travel in `dt` (a margin for broad-phase

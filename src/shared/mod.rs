@@ -17,6 +17,7 @@ mod material;
 pub mod mesh;
 pub mod model;
 mod pipeline;
+mod query;
 #[cfg(feature = "rerun")]
 #[path = "rerun.rs"]
 mod recorder;
@@ -34,6 +35,7 @@ pub use material::{Material, Stiffness};
 pub use mesh::{CellKind, Mesh, MeshWarning};
 pub use model::{ElementModel, RotationFit, ShapeDamping};
 pub use pipeline::{DeformablePipeline, PipelineSettings, RigidSets};
+pub use query::{DeformableHit, DeformableQueryFilter};
 #[cfg(feature = "rerun")]
 pub use recorder::{ColorField, RecorderError, RecorderOptions, RerunRecorder};
 pub use report::{DeformableReport, StepReport};

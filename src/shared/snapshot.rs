@@ -89,7 +89,7 @@ mod imp {
 
     use super::super::attach::{Attachment, Bindings};
     use super::super::body::{
-        check_state, Activation, Deformable, LastStep, Rest, State, StepBuffers,
+        check_state, Activation, Deformable, LastStep, Rest, State, StepBuffers, SurfaceTree,
     };
     use super::super::contact::{ContactMaterial, ContactPoint};
     use super::super::material::{Material, Resolved, Stiffness};
@@ -246,6 +246,7 @@ mod imp {
                     self.limiter.unwrap_or(Real::INFINITY),
                     &state,
                 ),
+                surface: SurfaceTree::build(&rest.mesh, &state.positions),
                 state,
                 rest,
                 activation: Activation {
@@ -253,6 +254,7 @@ mod imp {
                     sleeping: self.sleeping,
                     still_time: self.still_time,
                     frozen: self.frozen,
+                    woken: false,
                 },
                 last: LastStep {
                     report: self.report.into_owned(),

@@ -194,9 +194,12 @@ fn run_stack(steps: usize) -> DeformableWorld {
     world
 }
 
-/// The values recorded before the refactor of issue 13, for (2D, 3D).
+/// The values recorded before the refactor of issue 13, for (2D, 3D). `BLADES` was
+/// re-recorded by issue 14, whose node contacts cast each node's motion as a unit ray over its
+/// length (parry missed short rays across faces, taking them for parallel): the same contacts,
+/// rounded differently (before: 0xc8deaed0adbfd6c0, 0x85ce5166cb8950a9).
 const STACK: (u64, u64) = (0xbd47b7ab5610f757, 0xd539ce4a1cfe9292);
-const BLADES: (u64, u64) = (0xc8deaed0adbfd6c0, 0x85ce5166cb8950a9);
+const BLADES: (u64, u64) = (0x79542b881c62f88d, 0xf3461e78381f22cd);
 
 fn expected(pair: (u64, u64)) -> u64 {
     if DIM == 2 {

@@ -158,3 +158,87 @@ fn a_moving_bone_wakes_bound_tissue_and_drags_it_along() {
         "the tissue did not follow its bone: moved {moved:?}"
     );
 }
+
+#[test]
+fn a_box_on_a_jelly_sleeps_with_it_and_a_shot_wakes_both() {
+    // Issue 14, acceptance 5. A dynamic box settles on a jelly: both fall asleep within 3 s of
+    // settling, as one of rapier's islands would; a shot at the jelly (an impulse at a ray's
+    // hit) wakes both.
+    use crate::dim::rapier::geometry::Ray;
+    use crate::dim::DeformableQueryFilter;
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    ground(&mut world);
+    let h = jelly(&mut world, true);
+    let (rb, _) = world.physics.insert(
+        RigidBodyBuilder::dynamic().translation(UP * 0.7),
+        ColliderBuilder::new(crate::dim::rapier::geometry::SharedShape::new(
+            crate::dim::rapier::geometry::Cuboid::new(Vector::splat(0.1)),
+        ))
+        .density(200.0)
+        .friction(0.8),
+    );
+    // Settled: both slower than 5 cm/s (rapier's and sinew's sleep speeds) from then on.
+    let mut settled = None;
+    let mut both_asleep = None;
+    for k in 1..=600 {
+        world.step();
+        let jelly_speed = world.deformables[h]
+            .velocities()
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0, Real::max);
+        let box_speed = world.physics.bodies[rb].linvel().length();
+        if jelly_speed >= 0.05 || box_speed >= 0.05 {
+            settled = None;
+        } else if settled.is_none() {
+            settled = Some(k);
+        }
+        if world.deformables[h].is_sleeping() && world.physics.bodies[rb].is_sleeping() {
+            both_asleep = Some(k);
+            break;
+        }
+    }
+    let settled = settled.expect("the pair never settled");
+    let both_asleep = both_asleep.unwrap_or_else(|| {
+        panic!(
+            "not both asleep after 10 s: jelly {}, box {}",
+            world.deformables[h].is_sleeping(),
+            world.physics.bodies[rb].is_sleeping()
+        )
+    });
+    assert!(
+        (both_asleep - settled) as Real / 60.0 <= 3.0,
+        "settled at step {settled}, both asleep at {both_asleep}"
+    );
+    let resting = world.physics.bodies[rb].translation();
+    // Stays asleep, put.
+    for _ in 0..60 {
+        world.step();
+    }
+    assert!(world.deformables[h].is_sleeping() && world.physics.bodies[rb].is_sleeping());
+    assert_eq!(world.physics.bodies[rb].translation(), resting);
+    // A shot at the jelly's side, below the ball.
+    let mut origin = Vector::splat(0.0);
+    origin[0] = -3.0;
+    origin[1] = 0.3;
+    let mut dir = Vector::splat(0.0);
+    dir[0] = 1.0;
+    let hit = world
+        .deformables
+        .cast_ray(
+            &Ray::new(origin, dir),
+            10.0,
+            DeformableQueryFilter::default(),
+        )
+        .expect("the shot misses the jelly");
+    assert_eq!(hit.deformable, h);
+    assert!(world.deformables.apply_impulse_at(&hit, dir * 20.0));
+    assert!(!world.deformables[h].is_sleeping());
+    world.step();
+    assert!(
+        !world.physics.bodies[rb].is_sleeping(),
+        "the shot woke the jelly but not the box on it"
+    );
+    assert!(!world.deformables[h].is_sleeping());
+}

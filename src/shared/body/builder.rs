@@ -10,7 +10,7 @@ use super::super::model::{Accumulator, ElementModel, ModelState};
 use super::super::rapier::dynamics::CoefficientCombineRule;
 use super::super::rapier::geometry::InteractionGroups;
 use super::super::report::DeformableReport;
-use super::{Activation, Deformable, LastStep, Rest, State, StepBuffers};
+use super::{Activation, Deformable, LastStep, Rest, State, StepBuffers, SurfaceTree};
 
 enum Source {
     Mesh(Mesh),
@@ -281,6 +281,7 @@ impl DeformableBuilder {
         };
         Ok(Deformable {
             step: StepBuffers::new(Accumulator::new(n), false, Real::INFINITY, &state),
+            surface: SurfaceTree::build(&rest.mesh, &state.positions),
             state,
             rest,
             activation: Activation::awake(self.can_sleep),

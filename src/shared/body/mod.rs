@@ -13,9 +13,11 @@ use super::report::DeformableReport;
 
 mod builder;
 mod parts;
+mod surface;
 
 pub use builder::DeformableBuilder;
 pub(crate) use parts::{Activation, LastStep, Rest, State, StepBuffers};
+pub(crate) use surface::SurfaceTree;
 
 /// A deformable body.
 ///
@@ -28,6 +30,9 @@ pub struct Deformable {
     pub(crate) step: StepBuffers,
     pub(crate) activation: Activation,
     pub(crate) last: LastStep,
+    /// The surface's bounding-volume hierarchy at the current positions (refitted after each
+    /// step and each change of state; what queries search).
+    pub(crate) surface: SurfaceTree,
     /// Nodes bound to rigid bodies.
     pub(crate) bindings: Bindings,
     pub(crate) contact: ContactMaterial,
@@ -223,8 +228,10 @@ impl Deformable {
         self.activation.sleeping
     }
 
-    /// Wakes the body up (and restarts its still-time count).
+    /// Wakes the body up (and restarts its still-time count). The dynamic bodies it touched
+    /// or is bound to wake with it at the next step.
     pub fn wake_up(&mut self) {
+        self.activation.woken |= self.activation.sleeping;
         self.activation.sleeping = false;
         self.activation.still_time = 0.0;
     }
@@ -247,6 +254,7 @@ impl Deformable {
     pub fn set_positions(&mut self, positions: &[Vector]) -> Result<(), BuildError> {
         check_state("positions", positions, self.state.positions.len())?;
         self.state.positions.copy_from_slice(positions);
+        self.refit_surface();
         self.step.forces_valid = false;
         self.wake_up();
         Ok(())
@@ -357,6 +365,11 @@ impl Deformable {
             self.bindings_changed();
         }
         dropped
+    }
+
+    /// Brings the surface's hierarchy to the current positions.
+    pub(crate) fn refit_surface(&mut self) {
+        self.surface.refit(&self.rest.mesh, &self.state.positions);
     }
 
     fn bindings_changed(&mut self) {

@@ -111,6 +111,8 @@ pub(crate) struct Activation {
     pub still_time: Real,
     /// Frozen after its state turned non-finite; not simulated until unfrozen.
     pub frozen: bool,
+    /// Woken since the last step: the dynamic bodies it holds wake with it.
+    pub woken: bool,
 }
 
 impl Activation {
@@ -120,6 +122,7 @@ impl Activation {
             sleeping: false,
             still_time: 0.0,
             frozen: false,
+            woken: false,
         }
     }
 }

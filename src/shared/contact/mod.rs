@@ -60,7 +60,7 @@ pub(crate) use candidates::{
     broad_phase_is_current, candidate, near_colliders, node_candidates, Candidate, Scan,
 };
 pub(crate) use facet::{resolve_facet, FacetMotion};
-pub(crate) use node::{penetration, resolve_node, FreeNode};
+pub(crate) use node::{penetration, resolve_node, surface_skin, FreeNode};
 
 use super::math::{Real, Vector};
 use super::rapier::dynamics::CoefficientCombineRule;

@@ -2,10 +2,11 @@
 //! frame (see the module docs of [`super`]).
 
 use super::super::coupling::Substep;
-use super::super::math::{Pose, Real, Vector, FACET_ARITY};
+use super::super::math::{self, Pose, Real, Vector, FACET_ARITY};
 use super::super::rapier::dynamics::RigidBodySet;
 use super::super::rapier::geometry::{Aabb, BoundingVolume, Ray};
-use super::super::rapier::parry::shape::Shape;
+use super::super::rapier::parry::query::PointProjection;
+use super::super::rapier::parry::shape::{FeatureId, Shape, ShapeType};
 use super::candidates::Candidate;
 use super::solve::Contact;
 
@@ -85,26 +86,20 @@ pub(crate) fn resolve_node(
         }
         let a = p0.inverse_transform_point(start);
         let b = p1.inverse_transform_point(end);
-        let hit = if shape.contains_local_point(a) {
+        let hit = if is_two_sided(shape) {
+            surface_hit(shape, a, b, at.skin, ci)
+        } else if shape.contains_local_point(a) {
             let rel = || v_before - cand.point_velocity(start, s1, dt, motions, bodies);
-            hit_from_inside(shape, a, p0, rel, h, ci)
-        } else if a != b {
-            let ray = Ray::new(a, b - a);
-            shape
-                .cast_local_ray_and_get_normal(&ray, 1.0, true)
-                .map(|hit| {
-                    let local = ray.point_at(hit.time_of_impact);
-                    NodeHit {
-                        toi: hit.time_of_impact,
-                        normal: hit.normal,
-                        local,
-                        gap: (a - local).dot(hit.normal).max(0.0),
-                        candidate: ci,
-                        inside: false,
-                    }
-                })
+            hit_from_inside(shape, a, b - a, p0, rel, h, ci)
         } else {
-            None
+            cast_motion(shape, a, b, true).map(|(toi, normal, local)| NodeHit {
+                toi,
+                normal,
+                local,
+                gap: (a - local).dot(normal).max(0.0),
+                candidate: ci,
+                inside: false,
+            })
         };
         if let Some(hit) = hit {
             if best.as_ref().is_none_or(|b| hit.better_than(b)) {
@@ -153,12 +148,135 @@ pub(crate) fn resolve_node(
     })
 }
 
+/// Where a node moving from `a` to `b` (the collider's frame) first meets the shape: the
+/// fraction of the motion, the shape's normal there and the point. The ray is cast with a unit
+/// direction over the motion's length: parry takes a short ray (a slow node's motion over a
+/// substep) for one parallel to a segment or face it crosses, and misses it.
+fn cast_motion(
+    shape: &dyn Shape,
+    a: Vector,
+    b: Vector,
+    solid: bool,
+) -> Option<(Real, Vector, Vector)> {
+    let length = (b - a).length();
+    if length.is_nan() || length <= 0.0 {
+        return None;
+    }
+    let ray = Ray::new(a, (b - a) / length);
+    let hit = shape.cast_local_ray_and_get_normal(&ray, length, solid)?;
+    let on = ray.point_at(hit.time_of_impact);
+    Some((hit.time_of_impact / length, hit.normal, on))
+}
+
+/// Whether a shape is met as a surface from either side, without an inside: a trimesh (in 3D
+/// a closed one's pseudo-normals would say inside, but an open one's, of either winding, would
+/// send a node through; in 2D a point inside projects onto itself or onto an edge between two
+/// triangles), a polyline, a heightfield. A node that starts inside a closed one is not
+/// pushed out.
+pub(crate) fn is_two_sided(shape: &dyn Shape) -> bool {
+    matches!(
+        shape.shape_type(),
+        ShapeType::TriMesh | ShapeType::Polyline | ShapeType::HeightField
+    )
+}
+
+/// How far off a two-sided surface a node is kept, so that rounding never puts it on the
+/// other side: a thousandth of the body's shortest surface edge, at least a millionth of its
+/// coordinates' magnitude (a few f32 ulps), at most 1 mm.
+pub(crate) fn surface_skin(shortest_edge: Real, extent: Real) -> Real {
+    let fine = if shortest_edge.is_finite() {
+        1e-3 * shortest_edge
+    } else {
+        0.0
+    };
+    fine.min(1e-3).max(1e-6 * extent).max(1e-7)
+}
+
+/// A node (from `a` to `b` in the collider's frame) against a two-sided surface: stopped on
+/// the side it came from, `skin` off the surface. A node within the skin is put back on it
+/// (on its own side); one whose motion crosses the surface meets it there.
+fn surface_hit(shape: &dyn Shape, a: Vector, b: Vector, skin: Real, ci: usize) -> Option<NodeHit> {
+    let proj = shape.project_local_point(a, false);
+    let offset = a - proj.point;
+    let d = offset.length();
+    if d < skin {
+        // The side it is on; exactly on the surface, the side its motion comes from.
+        let normal = if d > 1e-3 * skin {
+            offset / d
+        } else {
+            // The face's normal (from the feature, or, for a heightfield that names none, from
+            // a ray along the node's motion), turned to face where the node comes from.
+            let (p, feature) = shape.project_local_point_and_get_feature(a);
+            let motion = b - a;
+            let dir = motion.normalize_or_zero();
+            let reach = motion.length() + skin;
+            let face = feature_normal(shape, p, feature).or_else(|| {
+                cast_motion(shape, a - dir * reach, a + dir * reach, false)
+                    .map(|(_, n, _)| n)
+                    .filter(|n| n.is_finite() && n.length_squared() > 0.5)
+            })?;
+            if face.dot(motion) > 0.0 {
+                -face
+            } else {
+                face
+            }
+        };
+        return Some(NodeHit {
+            toi: 0.0,
+            normal,
+            local: proj.point + normal * skin,
+            gap: d - skin,
+            candidate: ci,
+            inside: true,
+        });
+    }
+    // Met when the motion would bring the node within the skin, not only across the surface.
+    let dir = (b - a).normalize_or_zero();
+    let Some((toi, hit_normal, on)) = cast_motion(shape, a, b + dir * (2.0 * skin), false) else {
+        // Parry's ray can slip between two triangles through their shared edge: then the
+        // plane of the nearest point (the node is off the surface, so its offset is the
+        // normal) says whether the motion comes within the skin.
+        let n = offset / d;
+        let end = (b - proj.point).dot(n);
+        if end >= skin {
+            return None;
+        }
+        return Some(NodeHit {
+            toi: ((d - skin) / (d - end)).clamp(0.0, 1.0),
+            normal: n,
+            local: proj.point + n * skin,
+            gap: d - skin,
+            candidate: ci,
+            inside: false,
+        });
+    };
+    let toi = toi * ((b - a).length() + 2.0 * skin) / (b - a).length().max(Real::MIN_POSITIVE);
+    if hit_normal.length_squared() < 0.5 {
+        return None;
+    }
+    // Met from the side the node comes from.
+    let normal = if hit_normal.dot(b - a) > 0.0 {
+        -hit_normal
+    } else {
+        hit_normal
+    };
+    Some(NodeHit {
+        toi,
+        normal,
+        local: on + normal * skin,
+        gap: ((a - on).dot(normal) - skin).max(0.0),
+        candidate: ci,
+        inside: false,
+    })
+}
+
 /// The surface a node found inside a collider (at `a` in the collider's frame, whose pose at
-/// the start of the substep is `p0`) is put back on; `rel` gives its velocity relative to the
-/// collider.
+/// the start of the substep is `p0`) is put back on; `motion` is its motion over the substep
+/// and `rel` gives its velocity, both relative to the collider.
 fn hit_from_inside(
     shape: &dyn Shape,
     a: Vector,
+    motion: Vector,
     p0: &Pose,
     rel: impl FnOnce() -> Vector,
     h: Real,
@@ -171,17 +289,37 @@ fn hit_from_inside(
     // surface.
     // The normal comes from the feature projected on (a face's own normal), not from
     // the tiny, noisy offset of a node a hair inside.
-    let (proj, feature) = shape.project_local_point_and_get_feature(a);
-    let offset = proj.point - a;
+    let (proj_point, feature_normal) = match math::convex_planes(shape) {
+        // A convex polytope: out through the nearest face plane. Parry's projection of a
+        // point a hair inside can land on a far corner (2D) or an edge with a slanted normal
+        // (3D), which threw nodes across the collider.
+        Some(planes) => {
+            let (n, d) = planes
+                .into_iter()
+                .min_by(|x, y| (x.1 - x.0.dot(a)).total_cmp(&(y.1 - y.0.dot(a))))?;
+            (a + n * (d - n.dot(a)).max(0.0), Some(n))
+        }
+        None => {
+            let (proj, feature) = shape.project_local_point_and_get_feature(a);
+            (proj.point, feature_normal(shape, proj, feature))
+        }
+    };
+    let offset = proj_point - a;
     let depth = offset.length();
-    let feature_normal = shape
-        .feature_normal_at_point(Default::default(), feature, proj.point)
-        .filter(|n| n.is_finite() && n.length_squared() > 0.5);
     if depth <= Real::EPSILON {
         // On the surface: a touching contact (gap 0), so that the velocity constraint
         // holds; skipping it let a resting node sink for a substep, be pushed out the
         // next, and chatter forever.
-        feature_normal.map(|n| NodeHit {
+        // A shape that names no normal there (voxels): the one a ray meets coming along
+        // the node's motion relative to the collider.
+        let normal = feature_normal.or_else(|| {
+            let dir = motion.normalize_or_zero();
+            let reach = motion.length() + 1e-6;
+            cast_motion(shape, a - dir * reach, a + dir * reach, true)
+                .map(|(_, n, _)| n)
+                .filter(|n| n.is_finite() && n.length_squared() > 0.5)
+        });
+        normal.map(|n| NodeHit {
             toi: 0.0,
             normal: n,
             local: a,
@@ -190,8 +328,13 @@ fn hit_from_inside(
             inside: false,
         })
     } else {
-        let mut local = proj.point;
+        let mut local = proj_point;
         let mut normal = feature_normal.unwrap_or(offset / depth);
+        // A face between two parts of a compound (or two voxels) leads into the next part,
+        // not out: then only the way back out counts.
+        let probe = 1e-3 * depth + 1e-6;
+        let leads_inside = |p: Vector, n: Vector| shape.contains_local_point(p + n * probe);
+        let internal = leads_inside(local, normal);
         let rel = rel();
         if rel.length_squared() > 1e-12 {
             let back = Ray::new(a, p0.rotation.inverse() * -rel.normalize());
@@ -203,9 +346,13 @@ fn hit_from_inside(
                 } else {
                     hit.normal
                 };
-                if nb.length_squared() > 0.5 && nb.dot(normal) < 0.0 {
+                let exit = a + nb * nb.dot(back.point_at(hit.time_of_impact) - a);
+                if nb.length_squared() > 0.5
+                    && (nb.dot(normal) < 0.0 || internal)
+                    && !leads_inside(exit, nb)
+                {
                     normal = nb;
-                    local = a + nb * nb.dot(back.point_at(hit.time_of_impact) - a);
+                    local = exit;
                 }
             }
         }
@@ -218,6 +365,24 @@ fn hit_from_inside(
             inside: true,
         })
     }
+}
+
+/// The outward normal of the feature a point was projected on; for a compound, that of the
+/// part it was projected on (a compound answers none of its own).
+fn feature_normal(shape: &dyn Shape, proj: PointProjection, feature: FeatureId) -> Option<Vector> {
+    let usable = |n: &Vector| n.is_finite() && n.length_squared() > 0.5;
+    if let Some(n) = shape
+        .feature_normal_at_point(Default::default(), feature, proj.point)
+        .filter(usable)
+    {
+        return Some(n);
+    }
+    let (pose, part) = shape.as_compound()?.shapes().get(proj.subshape as usize)?;
+    let local = pose.inverse_transform_point(proj.point);
+    let (_, f) = part.project_local_point_and_get_feature(local);
+    part.feature_normal_at_point(Default::default(), f, local)
+        .filter(usable)
+        .map(|n| pose.rotation * n)
 }
 
 /// Depth of `x` inside the deepest of the given candidates (zero when outside all).

@@ -12,16 +12,19 @@
 //! 3. **substeps** ([`substep`]): each body advances on its own substeps. Every substep:
 //!    element forces at the current state (with each node's Gershgorin stiffness and damping
 //!    bounds); the substep size, the remaining time split evenly into pieces no longer than
-//!    `safety · min_i 2/ω_i (√(1+ζ_i²) − ζ_i)` ([`stable_substep`](super::model::stable_substep))
-//!    and than the edge-repulsion crossing limiter allows; `v += h (f/m + g)` (symplectic
-//!    Euler, the papers' integrator); the bone drive ([`super::attach`]); contacts on
+//!    the integrator's stability bound (for symplectic Euler, the papers' integrator,
+//!    `safety · min_i 2/ω_i (√(1+ζ_i²) − ζ_i)`, [`stable_substep`](super::model::stable_substep))
+//!    and than the edge-repulsion crossing limiter allows; the integrator's velocity update
+//!    (`v += h (f/m + g)`, [`super::integrator`]); the bone drive ([`super::attach`]); contacts on
 //!    velocities, nodes against colliders then rigid features against surface facets
 //!    ([`super::contact`]); `x += h v`.
 //! 4. **containment** ([`containment`]): a state that turned non-finite, or a cell stretched
 //!    past `max_stretch`, is rolled back to the start of the step with the rigid bodies it
-//!    pushed, and the body frozen.
+//!    pushed, and the body frozen; the surface's hierarchy is refitted to the final positions.
 //! 5. **report** ([`finish`]): penetration, inverted cells, energies, stage timings.
-//! 6. **sleep** ([`sleep`]): still long enough with nothing moving near it, the body sleeps.
+//! 6. **sleep** ([`sleep`]): still long enough with nothing moving near it (a dynamic body
+//!    resting on it, slower than rapier lets a body sleep at, does not count), the body sleeps,
+//!    and the dynamic bodies it touches or is bound to sleep with it; a woken body wakes them.
 //! 7. **events** ([`finish`]): the colliders touched this step against those of the last.
 //!
 //! After every body: the dynamic bodies they pushed get rapier's integration compensated
@@ -138,6 +141,10 @@ struct Scratch {
     contacts: Vec<ContactPoint>,
     /// The dynamic bodies a deformable may push this step, as they were before it.
     backup: RigidBackup,
+    /// The dynamic bodies a deformable holds (touches or is bound to).
+    held: Vec<RigidBodyHandle>,
+    /// How far off two-sided surfaces this body's nodes are kept.
+    skin: Real,
     /// `pushed.len()` when this body's step began: the bodies after it are this body's.
     pushed_before: usize,
 }
@@ -273,7 +280,9 @@ impl DeformablePipeline {
         let sc = &mut self.scratch;
         let detached = body.prune_attachments(bodies);
         // 1. wake
-        if sleep::stays_asleep(body, ctx, bodies, sc) {
+        let asleep = sleep::stays_asleep(body, ctx, bodies, sc);
+        sleep::wake_held_bodies(body, ctx, bodies, sc);
+        if asleep {
             sleep::report_asleep(body, detached);
             self.report
                 .deformables
@@ -300,6 +309,7 @@ impl DeformablePipeline {
             let integrate_start = Instant::now();
             // 4. containment
             let quality = containment::contain(body, ctx, bodies, sc);
+            body.refit_surface();
             // 5. report
             finish::diagnose(body, sc, &candidates, stats, quality);
             // 6. sleep

@@ -87,6 +87,8 @@ pub(super) fn prepare<'a>(
         0.0
     } + 1e-3 * size
         + 1e-4;
+    let extent = region.mins.abs().max(region.maxs.abs()).max_element();
+    sc.skin = contact::surface_skin(shortest, extent);
     let widen = node_margin + ctx.margin;
     let region = region.loosened(widen);
     let scan = ctx.scan(bodies, &body.contact);

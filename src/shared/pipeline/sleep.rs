@@ -6,9 +6,9 @@
 
 use super::super::body::Deformable;
 use super::super::contact;
-use super::super::coupling::is_moving;
+use super::super::coupling::{is_moving, is_restless};
 use super::super::math::{Real, Vector};
-use super::super::rapier::dynamics::RigidBodySet;
+use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::rapier::geometry::{Aabb, BoundingVolume};
 use super::{Scratch, StepContext};
 
@@ -25,6 +25,38 @@ pub(super) fn stays_asleep(
         body.wake_up();
     }
     body.activation.sleeping
+}
+
+/// The dynamic bodies a deformable touched or is bound to: those that sleep and wake with it,
+/// as the bodies of one of rapier's islands do.
+fn held_bodies(body: &Deformable, ctx: &StepContext<'_>, out: &mut Vec<RigidBodyHandle>) {
+    body.bindings.bodies(out);
+    for c in &body.last.touching {
+        if let Some(p) = ctx.colliders.get(*c).and_then(|c| c.parent()) {
+            if !out.contains(&p) {
+                out.push(p);
+            }
+        }
+    }
+}
+
+/// A deformable woken since its last step (by a disturbance, a setter, an impulse at a hit)
+/// wakes the dynamic bodies it holds.
+pub(super) fn wake_held_bodies(
+    body: &mut Deformable,
+    ctx: &StepContext<'_>,
+    bodies: &mut RigidBodySet,
+    sc: &mut Scratch,
+) {
+    if !std::mem::take(&mut body.activation.woken) {
+        return;
+    }
+    held_bodies(body, ctx, &mut sc.held);
+    for h in &sc.held {
+        if let Some(rb) = bodies.get_mut(*h).filter(|b| b.is_dynamic()) {
+            rb.wake_up(true);
+        }
+    }
 }
 
 /// The report of a body that slept through the step: not simulated, contacts (and so events)
@@ -93,14 +125,16 @@ fn disturbed(
 pub(super) fn update(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
-    bodies: &RigidBodySet,
-    sc: &Scratch,
+    bodies: &mut RigidBodySet,
+    sc: &mut Scratch,
     sane: bool,
 ) {
-    let quiet = sc
-        .motions
-        .iter()
-        .all(|m| bodies.get(m.handle).is_some_and(|b| !is_moving(b)));
+    // A dynamic body it holds may be awake: resting on the deformable, it sleeps with it.
+    let quiet = sc.motions.iter().all(|m| {
+        bodies
+            .get(m.handle)
+            .is_some_and(|b| !is_restless(b, ctx.gravity, ctx.dt))
+    });
     let max_speed = (0..body.state.positions.len())
         .filter(|&i| !body.is_attached(i as u32))
         .map(|i| body.state.velocities[i].length())
@@ -113,5 +147,11 @@ pub(super) fn update(
     if body.activation.still_time >= ctx.settings.time_until_sleep {
         body.activation.sleeping = true;
         body.state.velocities.fill(Vector::ZERO);
+        held_bodies(body, ctx, &mut sc.held);
+        for h in &sc.held {
+            if let Some(rb) = bodies.get_mut(*h).filter(|b| b.is_dynamic()) {
+                rb.sleep();
+            }
+        }
     }
 }

@@ -94,6 +94,7 @@ pub(super) fn run(
             s1: ((t + h) / dt).min(1.0),
             dt,
             restitution_threshold: ctx.settings.restitution_threshold,
+            skin: sc.skin,
             motions: &motions,
         };
 
