@@ -47,6 +47,11 @@
 //! Not covered: features of trimeshes, heightfields, compound and other shapes (their surfaces
 //! still stop nodes).
 //!
+//! **Level shapes.** Trimeshes, polylines and heightfields are two-sided surfaces a node is
+//! kept a skin off, on the side it is on; convex polytopes are left through the nearest face
+//! plane; compounds and voxels by the face of the part a node came in through
+//! (`docs/ARCHITECTURE.md` §6.2).
+//!
 //! Files: [`candidates`] (the broad phase and each candidate's motion and features), `node`
 //! (nodes against colliders), `facet` (rigid features against surface facets), `solve` (the
 //! velocity update of one contact).
