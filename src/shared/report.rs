@@ -28,6 +28,10 @@ pub struct DeformableReport {
     pub contacts: usize,
     /// Facet contacts (a rigid feature pushing a surface facet) summed over the substeps.
     pub facet_contacts: usize,
+    /// Contacts of its surface nodes with other deformables' surface facets, over the step's
+    /// substeps.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub soft_contacts: usize,
     /// Nodes bound to rigid bodies.
     pub attached_nodes: usize,
     /// Bindings dropped at the start of the step because their body was removed.

@@ -28,5 +28,6 @@ mod scenes;
 mod shapes;
 mod sleep;
 mod snapshot;
+mod soft;
 mod support;
 mod validation;

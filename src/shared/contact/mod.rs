@@ -59,6 +59,7 @@
 pub(crate) mod candidates;
 mod facet;
 mod node;
+pub(crate) mod soft;
 mod solve;
 
 pub(crate) use candidates::{

@@ -31,7 +31,7 @@ pub(super) fn contain(
         // A blow-up must not launch the bodies it pushed; restored, they took no impulse of
         // this body's and get no compensation for one.
         sc.backup.restore(bodies);
-        sc.pushed.truncate(sc.pushed_before);
+        sc.pushed.clear();
     }
     quality.filter(|_| !exploded)
 }

@@ -1,7 +1,10 @@
 //! One step of every deformable, run before rapier's `PhysicsPipeline::step` over the same
 //! `dt` (`docs/ARCHITECTURE.md` §4).
 //!
-//! [`DeformablePipeline::step`] is a list of phases, each a function of its own file:
+//! [`DeformablePipeline::step`] is a list of phases, each a function of its own file. The
+//! deformables that may touch each other form groups ([`soft`]) that step together: phases 1–2
+//! for each member, the substeps of phase 3 in lockstep (with contacts between the members),
+//! phases 4–7 for each member; a body alone is a group of one.
 //!
 //! 1. **wake** ([`sleep`]): a sleeping body wakes if a bone it is bound to moves, a collider it
 //!    touched was removed, or a moving body comes near; an asleep body skips the rest.
@@ -36,9 +39,11 @@ mod prepare;
 mod sleep;
 mod substep;
 
+use substep::{Member, SubstepStats};
+
 use std::time::Instant;
 
-use super::body::Deformable;
+use super::contact::soft::{self, SoftSurface};
 use super::contact::{Candidate, ContactMaterial, ContactPoint, Scan};
 use super::coupling::{self, BodyMotion, RigidBackup};
 use super::events::DeformableEventHandler;
@@ -100,7 +105,7 @@ pub struct DeformablePipeline {
     pub settings: PipelineSettings,
     /// Buffers rebuilt within every step: not part of a snapshot.
     #[cfg_attr(feature = "serde", serde(skip))]
-    scratch: Scratch,
+    work: Work,
     report: StepReport,
 }
 
@@ -116,6 +121,17 @@ pub struct RigidSets<'a> {
 }
 
 /// Buffers reused from step to step.
+#[derive(Clone, Debug, Default)]
+struct Work {
+    /// One per member of the group being stepped.
+    scratches: Vec<Scratch>,
+    /// Dynamic bodies this body's contacts pushed this step.
+    pushed: Vec<RigidBodyHandle>,
+    /// Pairs of deformables that may touch this step.
+    pairs: Vec<(DeformableHandle, DeformableHandle)>,
+}
+
+/// One body's buffers, reused from step to step.
 #[derive(Clone, Debug, Default)]
 struct Scratch {
     near: Vec<ColliderHandle>,
@@ -145,8 +161,11 @@ struct Scratch {
     held: Vec<RigidBodyHandle>,
     /// How far off two-sided surfaces this body's nodes are kept.
     skin: Real,
-    /// `pushed.len()` when this body's step began: the bodies after it are this body's.
-    pushed_before: usize,
+    /// Its surface as the other members of its group meet it this step.
+    soft_surface: SoftSurface,
+    /// Per surface node (CSR): the other members' facets near it, `(member, facet)`.
+    soft_start: Vec<u32>,
+    soft_cands: Vec<(u32, u32)>,
 }
 
 /// What every phase of one body's step reads.
@@ -255,11 +274,9 @@ impl DeformablePipeline {
             colliders,
             broad_phase,
         };
-        self.scratch.pushed.clear();
-        for (handle, body) in deformables.iter_mut() {
-            self.step_body(handle, body, &ctx, bodies, events);
-        }
-        for h in &self.scratch.pushed {
+        self.work.pushed.clear();
+        self.step_bodies(deformables, &ctx, bodies, events);
+        for h in &self.work.pushed {
             if let Some(rb) = bodies.get_mut(*h) {
                 coupling::match_rapier_integration(rb, gravity, dt, params.num_solver_iterations);
             }
@@ -268,70 +285,169 @@ impl DeformablePipeline {
         &self.report
     }
 
-    /// One body's step: the phases of the module docs, in order.
-    fn step_body(
+    /// Every body's step: the bodies that may touch each other step together, as a group
+    /// ([`soft`]), each group after the other.
+    fn step_bodies(
         &mut self,
-        handle: DeformableHandle,
-        body: &mut Deformable,
+        deformables: &mut DeformableSet,
         ctx: &StepContext<'_>,
         bodies: &mut RigidBodySet,
         events: &dyn DeformableEventHandler,
     ) {
-        let sc = &mut self.scratch;
-        let detached = body.prune_attachments(bodies);
+        let work = &mut self.work;
+        soft::pairs(
+            deformables,
+            ctx.dt,
+            ctx.settings.sleep_speed,
+            &mut work.pairs,
+        );
+        let handles: Vec<DeformableHandle> = deformables.iter().map(|(h, _)| h).collect();
+        for group in soft::groups(&handles, &work.pairs) {
+            if work.scratches.len() < group.len() {
+                work.scratches.resize_with(group.len(), Scratch::default);
+            }
+            let mut next = group.iter().map(|&k| handles[k]).peekable();
+            let mut chosen = Vec::with_capacity(group.len());
+            for (h, body) in deformables.iter_mut() {
+                if next.peek() == Some(&h) {
+                    next.next();
+                    chosen.push((h, body));
+                }
+            }
+            let mut members: Vec<Member<'_, '_>> = chosen
+                .into_iter()
+                .zip(work.scratches.iter_mut())
+                .map(|((handle, body), sc)| Member {
+                    handle,
+                    body,
+                    sc,
+                    candidates: Vec::new(),
+                    times: StageTimes::default(),
+                    stats: SubstepStats::default(),
+                    live: false,
+                    asleep: false,
+                })
+                .collect();
+            step_group(&mut members, ctx, bodies, events, &mut self.report);
+            for m in &members {
+                for h in &m.sc.pushed {
+                    if !work.pushed.contains(h) {
+                        work.pushed.push(*h);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A group's step: the phases of the module docs, for every member, the substeps together.
+fn step_group<'a>(
+    members: &mut [Member<'_, 'a>],
+    ctx: &StepContext<'a>,
+    bodies: &mut RigidBodySet,
+    events: &dyn DeformableEventHandler,
+    report: &mut StepReport,
+) {
+    let mut detached = Vec::with_capacity(members.len());
+    for m in members.iter_mut() {
+        let (body, sc) = (&mut *m.body, &mut *m.sc);
+        sc.pushed.clear();
+        detached.push(body.prune_attachments(bodies));
         // 1. wake
         let asleep = sleep::stays_asleep(body, ctx, bodies, sc);
         sleep::wake_held_bodies(body, ctx, bodies, sc);
-        if asleep {
-            sleep::report_asleep(body, detached);
-            self.report
-                .deformables
-                .push((handle, body.last.report.clone()));
-            return;
+        m.asleep = asleep;
+        m.live = !asleep && !body.activation.frozen && ctx.dt > 0.0;
+        if !asleep {
+            body.last.report.sleeping = false;
         }
-        body.last.report.sleeping = false;
-        if !body.activation.frozen && ctx.dt > 0.0 {
-            let mut times = StageTimes::default();
+        if m.live {
             // 2. prepare
-            let mut candidates = timed(&mut times.contacts, || {
+            m.candidates = timed(&mut m.times.contacts, || {
                 prepare::prepare(body, ctx, bodies, sc)
             });
-            // 3. substeps
-            let stats = substep::run(
-                &SymplecticEuler,
-                body,
-                ctx,
-                bodies,
-                sc,
-                &mut candidates,
-                &mut times,
-            );
-            let integrate_start = Instant::now();
-            // 4. containment
-            let quality = containment::contain(body, ctx, bodies, sc);
-            body.refit_surface();
-            // 5. report
-            finish::diagnose(body, sc, &candidates, stats, quality);
-            // 6. sleep
-            sleep::update(body, ctx, bodies, sc, quality.is_some());
-            finish::energies(body, ctx);
-            times.integrate = integrate_start.elapsed().as_secs_f64();
-            finish::timings(body, &times);
-        } else {
-            body.last.report.substeps = 0;
-            body.last.report.contacts = 0;
-            body.last.report.frozen = body.activation.frozen;
-            sc.near.clear();
-            sc.touched_colliders.clear();
         }
-        body.last.report.detached = detached;
-        body.last.report.attached_nodes = body.bindings.len();
-        // 7. events
-        finish::send_events(handle, body, sc, events);
-        self.report
-            .deformables
-            .push((handle, body.last.report.clone()));
     }
+    if members.len() > 1 {
+        for m in members.iter_mut() {
+            let still = !m.live;
+            m.sc.soft_surface.build(m.body, ctx.gravity, ctx.dt, still);
+        }
+        for i in 0..members.len() {
+            if !members[i].live {
+                continue;
+            }
+            let (start, cands) = soft_tables(members, i, ctx);
+            let sc = &mut *members[i].sc;
+            sc.soft_start = start;
+            sc.soft_cands = cands;
+        }
+    }
+    // 3. substeps
+    substep::run(&SymplecticEuler, members, ctx, bodies);
+    for (m, detached) in members.iter_mut().zip(detached) {
+        finish_member(m, ctx, bodies, events, detached, report);
+    }
+}
+
+/// The soft-contact tables of member `i` against the other members' surfaces.
+fn soft_tables(
+    members: &[Member<'_, '_>],
+    i: usize,
+    ctx: &StepContext<'_>,
+) -> (Vec<u32>, Vec<(u32, u32)>) {
+    let m = &members[i];
+    let (mut start, mut cands) = (Vec::new(), Vec::new());
+    let others = members
+        .iter()
+        .enumerate()
+        .filter(move |(j, _)| *j != i)
+        .map(|(j, o)| (j, &o.sc.soft_surface));
+    let widen = 4.0 * m.sc.skin + ctx.margin;
+    soft::node_tables(m.body, others, ctx.dt, widen, &mut start, &mut cands);
+    (start, cands)
+}
+
+/// Phases 4–7 of a member's step (or the report of one that slept or is frozen).
+fn finish_member(
+    m: &mut Member<'_, '_>,
+    ctx: &StepContext<'_>,
+    bodies: &mut RigidBodySet,
+    events: &dyn DeformableEventHandler,
+    detached: usize,
+    report: &mut StepReport,
+) {
+    let (handle, body, sc) = (m.handle, &mut *m.body, &mut *m.sc);
+    if m.asleep {
+        sleep::report_asleep(body, detached);
+        report.deformables.push((handle, body.last.report.clone()));
+        return;
+    }
+    if m.live {
+        let times = &mut m.times;
+        let integrate_start = Instant::now();
+        // 4. containment
+        let quality = containment::contain(body, ctx, bodies, sc);
+        body.refit_surface();
+        // 5. report
+        finish::diagnose(body, sc, &m.candidates, m.stats, quality);
+        // 6. sleep
+        sleep::update(body, ctx, bodies, sc, quality.is_some());
+        finish::energies(body, ctx);
+        times.integrate = integrate_start.elapsed().as_secs_f64();
+        finish::timings(body, times);
+    } else {
+        body.last.report.substeps = 0;
+        body.last.report.contacts = 0;
+        body.last.report.frozen = body.activation.frozen;
+        sc.near.clear();
+        sc.touched_colliders.clear();
+    }
+    body.last.report.detached = detached;
+    body.last.report.attached_nodes = body.bindings.len();
+    // 7. events
+    finish::send_events(handle, body, sc, events);
+    report.deformables.push((handle, body.last.report.clone()));
 }
 
 /// The candidates of one body's step (they borrow the collider set).

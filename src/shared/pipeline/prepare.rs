@@ -117,7 +117,6 @@ pub(super) fn prepare<'a>(
     sc.touched_colliders.clear();
     sc.touched_colliders.resize(candidates.len(), false);
     sc.backup.save(&sc.motions, bodies);
-    sc.pushed_before = sc.pushed.len();
     tables(body, &scan, &candidates, widen, sc);
     body.last.contacts.clear();
     candidates

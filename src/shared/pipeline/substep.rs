@@ -3,11 +3,13 @@
 
 use super::super::attach::{self, DrivenNodes};
 use super::super::body::Deformable;
+use super::super::contact::soft;
 use super::super::contact::{self, FacetMotion, FreeNode};
-use super::super::coupling::Substep;
+use super::super::coupling::{BodyMotion, Substep};
 use super::super::integrator::{Bound, Integrate};
 use super::super::math::{Real, Vector, FACET_ARITY};
 use super::super::rapier::dynamics::RigidBodySet;
+use super::super::set::DeformableHandle;
 use super::{timed, Candidates, Scratch, StageTimes, StepContext};
 
 /// Most feature crossings resolved per surface facet and substep.
@@ -23,6 +25,8 @@ pub(super) struct SubstepStats {
     pub cap_hit: bool,
     pub lost_time: Real,
     pub facet_contacts: usize,
+    /// Contacts of its nodes with other deformables' facets.
+    pub soft_contacts: usize,
 }
 
 /// The substep size at the current state's bound, or `None` when the body is out of substeps
@@ -58,91 +62,170 @@ fn substep_size(
     }
 }
 
-/// Runs the substeps of one body's step, its velocities advanced by `integrator`.
+/// One body of a group stepped together: those that may touch each other take every substep
+/// together (the shortest any of them needs), so their contacts act on both at once.
+pub(super) struct Member<'m, 'a> {
+    pub handle: DeformableHandle,
+    pub body: &'m mut Deformable,
+    pub sc: &'m mut Scratch,
+    pub candidates: Candidates<'a>,
+    pub times: StageTimes,
+    pub stats: SubstepStats,
+    /// Simulated this step (awake, not frozen); the others stay put, met as still surfaces.
+    pub live: bool,
+    /// Asleep at the start of the step (reported as asleep, even if a push woke it).
+    pub asleep: bool,
+}
+
+/// Runs the substeps of a group's step, the velocities advanced by `integrator`.
 pub(super) fn run(
     integrator: &impl Integrate,
-    body: &mut Deformable,
+    members: &mut [Member<'_, '_>],
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
-    sc: &mut Scratch,
-    candidates: &mut Candidates<'_>,
-    times: &mut StageTimes,
-) -> SubstepStats {
+) {
     let dt = ctx.dt;
-    let g = ctx.gravity * body.gravity_scale;
-    let n = body.state.positions.len();
-    let mut stats = SubstepStats::default();
+    let live: Vec<usize> = (0..members.len()).filter(|&i| members[i].live).collect();
     // The motions are read all through the loop while the other buffers change.
-    let motions = std::mem::take(&mut sc.motions);
+    let motions: Vec<Vec<BodyMotion>> = members
+        .iter_mut()
+        .map(|m| std::mem::take(&mut m.sc.motions))
+        .collect();
     let mut t = 0.0;
-    loop {
-        let remaining = dt - t;
-        if let Some(k) = ctx.settings.fixed_substeps {
-            if stats.substeps >= k.max(1) {
-                break;
+    let mut substeps = 0;
+    while let Some(h) = next_substep(integrator, members, &live, ctx, dt - t, substeps) {
+        for &i in &live {
+            let m = &mut members[i];
+            let at = substep_at(ctx, m.sc.skin, h, t, &motions[i]);
+            advance(integrator, m, ctx, &at, bodies);
+        }
+        if live.len() > 1 {
+            let at = substep_at(ctx, 0.0, h, t, &[]);
+            soft_contacts(members, &live, &at, substeps % 2 == 1);
+        }
+        for &i in &live {
+            let m = &mut members[i];
+            let body = &mut *m.body;
+            for (x, v) in body.state.positions.iter_mut().zip(&body.state.velocities) {
+                *x += *v * h;
             }
-        } else if remaining <= dt * 1e-6 {
-            break;
+            attach::place_on_bones(&body.bindings, &m.sc.targets, &mut body.state.positions);
+            body.step.forces_valid = false;
+            m.stats.substeps += 1;
         }
-        timed(&mut times.forces, || body.refresh_forces());
-        let Some(h) = substep_size(integrator.bound(body), ctx, remaining, &mut stats) else {
-            break;
-        };
-        let at = Substep {
-            h,
-            t,
-            s1: ((t + h) / dt).min(1.0),
-            dt,
-            restitution_threshold: ctx.settings.restitution_threshold,
-            skin: sc.skin,
-            motions: &motions,
-        };
-
-        // Velocities first (the contacts act on them), from the element forces and gravity.
-        body.step
-            .scratch_velocities
-            .copy_from_slice(&body.state.velocities);
-        integrator.advance_velocities(body, g, h);
-
-        // Bound nodes follow their bones.
-        let nodes = DrivenNodes {
-            positions: &body.state.positions,
-            velocities: &mut body.state.velocities,
-            inv_masses: &body.rest.inv_masses,
-        };
-        attach::drive_bones(
-            &body.bindings,
-            &sc.attachment_motion,
-            nodes,
-            &at,
-            bodies,
-            &mut sc.targets,
-        );
-
-        // Contacts, on velocities, before positions move.
-        if !candidates.is_empty() {
-            timed(&mut times.contacts, || {
-                for c in candidates.iter_mut() {
-                    c.advance(at.s1, dt, at.motions, bodies);
-                }
-                // Sequential impulses in one fixed order are lopsided (a box landing flat on a
-                // soft cube was kicked sideways and kept swaying): the sweeps alternate.
-                let backward = stats.substeps % 2 == 1;
-                node_contacts(body, &at, backward, bodies, sc, candidates);
-                stats.facet_contacts += facet_contacts(body, &at, backward, bodies, sc, candidates);
-            });
-        }
-
-        for i in 0..n {
-            body.state.positions[i] += body.state.velocities[i] * h;
-        }
-        attach::place_on_bones(&body.bindings, &sc.targets, &mut body.state.positions);
-        body.step.forces_valid = false;
         t += h;
-        stats.substeps += 1;
+        substeps += 1;
     }
-    sc.motions = motions;
-    stats
+    for (m, motions) in members.iter_mut().zip(motions) {
+        m.sc.motions = motions;
+    }
+}
+
+fn substep_at<'a>(
+    ctx: &StepContext<'_>,
+    skin: Real,
+    h: Real,
+    t: Real,
+    motions: &'a [BodyMotion],
+) -> Substep<'a> {
+    Substep {
+        h,
+        t,
+        s1: ((t + h) / ctx.dt).min(1.0),
+        dt: ctx.dt,
+        restitution_threshold: ctx.settings.restitution_threshold,
+        skin,
+        motions,
+    }
+}
+
+/// The next substep of the group: the element forces made current, then the shortest size any
+/// live member needs; `None` when the step is done or a member ran out of substeps (then the
+/// whole group drops the rest of the step, each saying so).
+fn next_substep(
+    integrator: &impl Integrate,
+    members: &mut [Member<'_, '_>],
+    live: &[usize],
+    ctx: &StepContext<'_>,
+    remaining: Real,
+    substeps: usize,
+) -> Option<Real> {
+    if let Some(k) = ctx.settings.fixed_substeps {
+        if substeps >= k.max(1) {
+            return None;
+        }
+    } else if remaining <= ctx.dt * 1e-6 {
+        return None;
+    }
+    let mut h = Real::INFINITY;
+    let mut out = false;
+    for &i in live {
+        let m = &mut members[i];
+        timed(&mut m.times.forces, || m.body.refresh_forces());
+        match substep_size(integrator.bound(m.body), ctx, remaining, &mut m.stats) {
+            Some(hi) => h = h.min(hi),
+            None => out = true,
+        }
+    }
+    if out {
+        for &i in live {
+            let stats = &mut members[i].stats;
+            stats.cap_hit = true;
+            stats.lost_time = remaining;
+        }
+        return None;
+    }
+    (h < Real::INFINITY).then_some(h)
+}
+
+/// One member's substep up to its positions: the integrator's velocities, the bone drive, the
+/// contacts with rigid colliders.
+fn advance(
+    integrator: &impl Integrate,
+    m: &mut Member<'_, '_>,
+    ctx: &StepContext<'_>,
+    at: &Substep<'_>,
+    bodies: &mut RigidBodySet,
+) {
+    let g = ctx.gravity * m.body.gravity_scale;
+    let body = &mut *m.body;
+    let sc = &mut *m.sc;
+    // Velocities first (the contacts act on them), from the element forces and gravity.
+    body.step
+        .scratch_velocities
+        .copy_from_slice(&body.state.velocities);
+    integrator.advance_velocities(body, g, at.h);
+
+    // Bound nodes follow their bones.
+    let nodes = DrivenNodes {
+        positions: &body.state.positions,
+        velocities: &mut body.state.velocities,
+        inv_masses: &body.rest.inv_masses,
+    };
+    attach::drive_bones(
+        &body.bindings,
+        &sc.attachment_motion,
+        nodes,
+        at,
+        bodies,
+        &mut sc.targets,
+    );
+
+    // Contacts, on velocities, before positions move.
+    let candidates = &mut m.candidates;
+    if !candidates.is_empty() {
+        let stats = &mut m.stats;
+        timed(&mut m.times.contacts, || {
+            for c in candidates.iter_mut() {
+                c.advance(at.s1, at.dt, at.motions, bodies);
+            }
+            // Sequential impulses in one fixed order are lopsided (a box landing flat on a
+            // soft cube was kicked sideways and kept swaying): the sweeps alternate.
+            let backward = stats.substeps % 2 == 1;
+            node_contacts(body, at, backward, bodies, sc, candidates);
+            stats.facet_contacts += facet_contacts(body, at, backward, bodies, sc, candidates);
+        });
+    }
 }
 
 /// The `j`-th index of `len` in the sweep's order.
@@ -249,4 +332,43 @@ fn facet_contacts(
         }
     }
     solved
+}
+
+/// Every free surface node of each live member against the surface facets of the other
+/// members (see [`soft`](super::super::contact::soft)).
+fn soft_contacts(members: &mut [Member<'_, '_>], live: &[usize], at: &Substep<'_>, backward: bool) {
+    for &i in live {
+        let surface = members[i].body.rest.mesh.boundary_nodes().len();
+        for j in 0..surface {
+            let k = order(backward, surface, j);
+            let m = &members[i];
+            let (b0, b1) = (m.sc.soft_start[k] as usize, m.sc.soft_start[k + 1] as usize);
+            if b0 == b1 {
+                continue;
+            }
+            let node = m.body.rest.mesh.boundary_nodes()[k];
+            let cands = &m.sc.soft_cands[b0..b1];
+            let body_of = |j: usize| (&*members[j].body, &members[j].sc.soft_surface);
+            let Some(hit) = soft::find(body_of, i, node, cands, at) else {
+                continue;
+            };
+            let (a, b) = pair_mut(members, i, hit.other);
+            let touched = soft::resolve(a.body, node, b.body, !b.live, &hit, at);
+            if touched {
+                a.stats.soft_contacts += 1;
+            }
+        }
+    }
+}
+
+/// Two distinct elements of a slice, mutably.
+fn pair_mut<T>(v: &mut [T], i: usize, j: usize) -> (&mut T, &mut T) {
+    assert!(i != j);
+    if i < j {
+        let (lo, hi) = v.split_at_mut(j);
+        (&mut lo[i], &mut hi[0])
+    } else {
+        let (lo, hi) = v.split_at_mut(i);
+        (&mut hi[0], &mut lo[j])
+    }
 }

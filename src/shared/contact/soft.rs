@@ -1,0 +1,381 @@
+//! Contact between deformables: the surface nodes of each body against the surface facets of
+//! the others.
+//!
+//! **Groups.** Bodies whose boxes, swept over the step, overlap (and whose collision groups let
+//! them meet) step together: every substep of the group has the size the most demanding of
+//! them needs, every body advances its velocities (forces, bones, rigid contacts), then the
+//! nodes of each meet the facets of the others on those velocities, then all positions move.
+//! Both sides of a contact are live, so one impulse acts on both at once: equal and opposite
+//! between the node and the facet's nodes (barycentric shares), so momentum is conserved, and
+//! never more than stops the approach, so no energy is created. (Stepping the bodies one after
+//! another, each meeting the others as obstacles whose reactions waited for their next step,
+//! created energy: a node stopped against a facet that could not give way this step, of a
+//! lighter body, gained `½ m₁u² (m₁/m₂ − 1)`.) A sleeping or frozen member is a still surface:
+//! it gives no way, and a push faster than the sleep speed wakes it.
+//!
+//! **A contact**, each substep, for a node (moving from `p0` to `p1 = p0 + h v`) and a facet of
+//! another body (from `q0` to `q1 = q0 + h v`): the node ends the substep within a skin of the
+//! facet's plane or behind it, inside the facet's prism, having started in front of it or less
+//! than half the other body's shortest surface edge behind (deeper, a node is not this facet's
+//! business). Among its candidate facets the one it is most in front of wins (the face it comes
+//! through). A node found behind starts the substep on the plane. Its target is the normal
+//! relative velocity that closes the gap down to a skin, leaves the skin a tenth of the way per
+//! substep once within it, or is `−e · approach` for a bounce; friction is Coulomb's. The pair's `μ` and `e` combine both bodies' coefficients by rapier's rules.
+//!
+//! **Broad phase.** Each body's facet boxes swept over the step go into a BVH (parry's), built
+//! once per step; each surface node of the others queries it with its own swept box.
+//!
+//! Not covered yet: edges of two coarse 3D meshes crossing with no node through a facet; a body
+//! against its own surface (self contact); contact events between deformables. A soft cube
+//! resting on another keeps a slow sway (1–6 cm/s after 4 s in `tests/shared/soft.rs`, total
+//! energy constant): the stuck contact and the bodies' damping, which leaves a cell's rigid
+//! motion alone, take nothing from the upper body rocking as a whole, so the pair does not fall
+//! asleep.
+
+use super::super::body::Deformable;
+use super::super::coupling::Substep;
+use super::super::math::{self, Real, Vector, FACET_ARITY};
+use super::super::rapier::dynamics::CoefficientCombineRule;
+use super::super::rapier::geometry::{Aabb, BoundingVolume};
+use super::super::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
+use super::super::set::{DeformableHandle, DeformableSet};
+
+/// A body's surface as the other members of its group meet it during a step.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct SoftSurface {
+    /// The facets' boxes swept over the step (leaf = boundary facet index).
+    tree: Bvh,
+    /// Deeper than this behind a facet, a node is not pushed out through it.
+    depth_limit: Real,
+}
+
+impl SoftSurface {
+    /// The surface of `body` swept over the step under `gravity` (staying put if `still`).
+    pub fn build(&mut self, body: &Deformable, gravity: Vector, dt: Real, still: bool) {
+        let x = &body.state.positions;
+        let v = &body.state.velocities;
+        let g = gravity * body.gravity_scale;
+        let mut shortest = Real::INFINITY;
+        let boxes: Vec<Aabb> = body
+            .rest
+            .mesh
+            .boundary_facets()
+            .iter()
+            .map(|f| {
+                let mut b = Aabb::new_invalid();
+                for a in 0..FACET_ARITY {
+                    let i = f[a] as usize;
+                    b.take_point(x[i]);
+                    if !still {
+                        b.take_point(x[i] + v[i] * dt + g * (0.5 * dt * dt));
+                    }
+                    shortest = shortest.min(x[i].distance(x[f[(a + 1) % FACET_ARITY] as usize]));
+                }
+                b
+            })
+            .collect();
+        self.tree = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+        self.depth_limit = if shortest.is_finite() {
+            0.5 * shortest
+        } else {
+            0.0
+        };
+    }
+}
+
+/// The pairs of deformables that may touch this step, from their boxes swept over the step (a
+/// BVH over the bodies' boxes, one query each), by their collision groups; both asleep, a pair
+/// is left out. Also wakes a sleeping body that a moving one comes near.
+pub(crate) fn pairs(
+    set: &mut DeformableSet,
+    dt: Real,
+    sleep_speed: Real,
+    out: &mut Vec<(DeformableHandle, DeformableHandle)>,
+) {
+    out.clear();
+    let bodies: Vec<(DeformableHandle, Aabb, bool)> = set
+        .iter()
+        .map(|(h, b)| {
+            let mut region = Aabb::new_invalid();
+            let mut fastest: Real = 0.0;
+            for &i in b.rest.mesh.boundary_nodes() {
+                let (x, v) = (
+                    b.state.positions[i as usize],
+                    b.state.velocities[i as usize],
+                );
+                region.take_point(x);
+                region.take_point(x + v * dt);
+                fastest = fastest.max(v.length());
+            }
+            let size = (region.maxs - region.mins).max_element().max(1e-3);
+            let moving = !b.activation.sleeping && fastest > sleep_speed;
+            (h, region.loosened(0.05 * size + 1e-4), moving)
+        })
+        .collect();
+    if bodies.len() < 2 {
+        return;
+    }
+    let boxes: Vec<Aabb> = bodies.iter().map(|b| b.1).collect();
+    let tree = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+    let mut wake = Vec::new();
+    for (a, (ha, box_a, moving_a)) in bodies.iter().enumerate() {
+        for b in tree.intersect_aabb(box_a) {
+            let b = b as usize;
+            if b <= a {
+                continue;
+            }
+            let (hb, _, moving_b) = bodies[b];
+            let (da, db) = (&set[*ha], &set[hb]);
+            if !da.contact.groups.test(db.contact.groups) {
+                continue;
+            }
+            let (sleep_a, sleep_b) = (da.activation.sleeping, db.activation.sleeping);
+            if sleep_a && sleep_b {
+                continue;
+            }
+            if sleep_a && moving_b {
+                wake.push(*ha);
+            }
+            if sleep_b && *moving_a {
+                wake.push(hb);
+            }
+            out.push((*ha, hb));
+        }
+    }
+    out.sort_unstable_by_key(|(a, b)| (a.into_raw_parts(), b.into_raw_parts()));
+    for h in wake {
+        set[h].wake_up();
+    }
+}
+
+/// The groups of bodies that step together: the connected sets of `pairs`, as indices into
+/// `handles` (each ascending), in the order of their first body; a body in no pair is a group
+/// of one.
+pub(crate) fn groups(
+    handles: &[DeformableHandle],
+    pairs: &[(DeformableHandle, DeformableHandle)],
+) -> Vec<Vec<usize>> {
+    let index = |h: DeformableHandle| handles.iter().position(|x| *x == h);
+    let mut parent: Vec<usize> = (0..handles.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for &(a, b) in pairs {
+        if let (Some(a), Some(b)) = (index(a), index(b)) {
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    let mut group_of: Vec<Option<usize>> = vec![None; handles.len()];
+    for i in 0..handles.len() {
+        let r = root(&mut parent, i);
+        match group_of[r] {
+            Some(g) => out[g].push(i),
+            None => {
+                group_of[r] = Some(out.len());
+                out.push(vec![i]);
+            }
+        }
+    }
+    out
+}
+
+/// Per surface node of `body` (CSR): the facets of the other members' surfaces its box swept
+/// over the step meets, as `(member, facet)`, ascending.
+pub(crate) fn node_tables<'s>(
+    body: &Deformable,
+    others: impl Iterator<Item = (usize, &'s SoftSurface)> + Clone,
+    dt: Real,
+    widen: Real,
+    start: &mut Vec<u32>,
+    cands: &mut Vec<(u32, u32)>,
+) {
+    start.clear();
+    cands.clear();
+    start.push(0);
+    for &i in body.rest.mesh.boundary_nodes() {
+        if !body.is_attached(i) {
+            let (x, v) = (
+                body.state.positions[i as usize],
+                body.state.velocities[i as usize],
+            );
+            let mut b = Aabb::new_invalid();
+            b.take_point(x);
+            b.take_point(x + v * dt);
+            let b = b.loosened(widen);
+            let begin = cands.len();
+            for (m, surface) in others.clone() {
+                cands.extend(surface.tree.intersect_aabb(&b).map(|f| (m as u32, f)));
+            }
+            cands[begin..].sort_unstable();
+        }
+        start.push(cands.len() as u32);
+    }
+}
+
+/// A node's contact with another member's facet, found at the start of a substep.
+pub(crate) struct SoftHit {
+    /// The member whose facet it is.
+    pub other: usize,
+    facet: [u32; FACET_ARITY],
+    weights: [Real; FACET_ARITY],
+    /// Outward normal of the facet at the end of the substep.
+    normal: Vector,
+    /// Signed distance of the node from the facet's plane at the start (negative: behind).
+    d0: Real,
+}
+
+/// The facet of the candidates `cands` that `node` of `body_of(i)` meets in this substep (see
+/// the module docs); `body_of(j)` gives member `j`'s body and surface.
+pub(crate) fn find<'b>(
+    body_of: impl Fn(usize) -> (&'b Deformable, &'b SoftSurface),
+    i: usize,
+    node: u32,
+    cands: &[(u32, u32)],
+    at: &Substep<'_>,
+) -> Option<SoftHit> {
+    let h = at.h;
+    let (body, _) = body_of(i);
+    let n_i = node as usize;
+    let p0 = body.state.positions[n_i];
+    let p1 = p0 + body.state.velocities[n_i] * h;
+    let skin = at.skin;
+    let mut best: Option<SoftHit> = None;
+    for &(m, f) in cands {
+        let (other, surface) = body_of(m as usize);
+        let facet = other.rest.mesh.boundary_facets()[f as usize];
+        let (x, v) = (&other.state.positions, &other.state.velocities);
+        let q0: [Vector; FACET_ARITY] = std::array::from_fn(|a| x[facet[a] as usize]);
+        let q1: [Vector; FACET_ARITY] = std::array::from_fn(|a| q0[a] + v[facet[a] as usize] * h);
+        let n1 = math::facet_normal(&q1).normalize_or_zero();
+        if n1 == Vector::ZERO {
+            continue;
+        }
+        let d1 = (p1 - q1[0]).dot(n1);
+        if d1 >= skin {
+            continue;
+        }
+        let n0 = math::facet_normal(&q0).normalize_or(n1);
+        let d0 = (p0 - q0[0]).dot(n0);
+        if d0 < -surface.depth_limit || best.as_ref().is_some_and(|b| b.d0 >= d0) {
+            continue;
+        }
+        let w = math::facet_barycentric(&q1, p1);
+        if w.iter().any(|&w| w < -1e-3) {
+            continue;
+        }
+        let w = w.map(|w| w.max(0.0));
+        let total: Real = w.iter().sum();
+        best = Some(SoftHit {
+            other: m as usize,
+            facet,
+            weights: w.map(|w| w / total),
+            normal: n1,
+            d0,
+        });
+    }
+    best
+}
+
+/// Solves a contact [`find`] found between `node` of `body` and a facet of `other` (which
+/// gives no way if `still`); returns whether an impulse was applied.
+pub(crate) fn resolve(
+    body: &mut Deformable,
+    node: u32,
+    other: &mut Deformable,
+    still: bool,
+    hit: &SoftHit,
+    at: &Substep<'_>,
+) -> bool {
+    let (h, skin) = (at.h, at.skin);
+    let i = node as usize;
+    let n = hit.normal;
+    let inv_of = |b: &Deformable, j: u32| {
+        if b.is_attached(j) {
+            0.0
+        } else {
+            b.rest.inv_masses[j as usize]
+        }
+    };
+    let w_node = inv_of(body, node);
+    let w_facet: [Real; FACET_ARITY] = std::array::from_fn(|a| {
+        if still {
+            0.0
+        } else {
+            inv_of(other, hit.facet[a])
+        }
+    });
+    let k = w_node
+        + (0..FACET_ARITY)
+            .map(|a| hit.weights[a] * hit.weights[a] * w_facet[a])
+            .sum::<Real>();
+    if k <= 0.0 {
+        return false;
+    }
+    // A node found behind the facet starts the substep on it.
+    if hit.d0 < 0.0 {
+        body.state.positions[i] -= n * hit.d0;
+    }
+    let d0 = hit.d0.max(0.0);
+    let facet_velocity = |vel: &[Vector]| -> Vector {
+        (0..FACET_ARITY)
+            .map(|a| vel[hit.facet[a] as usize] * hit.weights[a])
+            .sum()
+    };
+    let c = (&body.contact, &other.contact);
+    let friction = CoefficientCombineRule::combine(
+        c.0.friction,
+        c.1.friction,
+        c.0.friction_combine_rule,
+        c.1.friction_combine_rule,
+    );
+    let restitution = CoefficientCombineRule::combine(
+        c.0.restitution,
+        c.1.restitution,
+        c.0.restitution_combine_rule,
+        c.1.restitution_combine_rule,
+    );
+    let approach =
+        (body.step.scratch_velocities[i] - facet_velocity(&other.step.scratch_velocities)).dot(n);
+    // Close the gap down to the skin; within the skin, stop approaching and leave it slowly (a
+    // tenth of the way per substep: pushing out at once pumped a stacked pair into rocking).
+    let gap = d0 - skin;
+    let mut target = if gap >= 0.0 { -gap / h } else { -0.1 * gap / h };
+    if -approach > at.restitution_threshold && restitution > 0.0 {
+        target = target.max(-restitution * approach);
+    }
+    let rel = body.state.velocities[i] - facet_velocity(&other.state.velocities);
+    let vn = rel.dot(n);
+    let normal_impulse = ((target - vn) / k).max(0.0);
+    let mut impulse = n * normal_impulse;
+    if friction > 0.0 {
+        let after = rel + n * (normal_impulse * k);
+        let vt = after - n * after.dot(n);
+        let slip = vt.length();
+        if slip > 0.0 {
+            impulse -= vt * ((slip / k).min(friction * normal_impulse) / slip);
+        }
+    }
+    if impulse == Vector::ZERO {
+        return false;
+    }
+    body.state.velocities[i] += impulse * w_node;
+    if still {
+        // A still body gives no way; a push that would move it faster than it may sleep at
+        // wakes it for the next step.
+        let push = impulse.length() * inv_of(other, hit.facet[0]);
+        if push > at.restitution_threshold {
+            other.wake_up();
+        }
+    } else {
+        for ((&j, &w), &inv) in hit.facet.iter().zip(&hit.weights).zip(&w_facet) {
+            other.state.velocities[j as usize] -= impulse * (w * inv);
+        }
+    }
+    true
+}
