@@ -146,7 +146,7 @@ pub enum BuildError {
 }
 
 /// Something legal in a mesh that is probably a mistake. [`Mesh::diagnose`](super::Mesh::diagnose) lists them;
-/// [`crate::DeformableBuilder`]'s `deny_warnings` turns them into errors.
+/// [`DeformableBuilder`](super::DeformableBuilder)'s `deny_warnings` turns them into errors.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum MeshWarning {

@@ -177,7 +177,7 @@ impl DeformableBuilder {
     }
 
     /// Whether the body may fall asleep when it rests (default `true`, as rapier's bodies;
-    /// thresholds in [`PipelineSettings`](super::PipelineSettings)).
+    /// thresholds in [`PipelineSettings`](super::super::PipelineSettings)).
     pub fn can_sleep(mut self, can_sleep: bool) -> Self {
         self.can_sleep = can_sleep;
         self

@@ -100,7 +100,7 @@ pub struct CellLaw {
 /// Forces of one shape-based element with `N` vertices at `x` moving with `v`, rest offsets
 /// `rest` (from the rest centroid), under `law`, its rotation warm-started from `warm`. Returns the force
 /// on each vertex, the fitted rotation, and the smallest sum of two singular values of
-/// `A = Σ r_i R0_iᵀ` (see [`ShapeMatching::turning_stiffness`]).
+/// `A = Σ r_i R0_iᵀ` (see `ShapeMatching::turning_stiffness`).
 ///
 /// Offsets are taken from the first vertex before the centroid is subtracted: in `f32` the
 /// centroid of coordinates far from the origin, `Σx · (1/n)`, is off by an ulp of `x`, and that
