@@ -155,7 +155,13 @@ pub(crate) fn groups(
     handles: &[DeformableHandle],
     pairs: &[(DeformableHandle, DeformableHandle)],
 ) -> Vec<Vec<usize>> {
-    let index = |h: DeformableHandle| handles.iter().position(|x| *x == h);
+    // The set iterates in arena order: the handles are sorted by index.
+    let index = |h: DeformableHandle| {
+        handles
+            .binary_search_by_key(&h.into_raw_parts().0, |x| x.into_raw_parts().0)
+            .ok()
+            .filter(|&k| handles[k] == h)
+    };
     let mut parent: Vec<usize> = (0..handles.len()).collect();
     fn root(parent: &mut [usize], mut i: usize) -> usize {
         while parent[i] != i {
@@ -378,4 +384,21 @@ pub(crate) fn resolve(
         }
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn groups_are_the_connected_sets_of_pairs() {
+        let h: Vec<DeformableHandle> = (0..5)
+            .map(|i| DeformableHandle::from_raw_parts(i, 0))
+            .collect();
+        // 0–3 and 3–4 touch, 1 and 2 are alone; a pair naming a stale handle is ignored.
+        let stale = DeformableHandle::from_raw_parts(2, 7);
+        let pairs = [(h[3], h[4]), (h[0], h[3]), (h[1], stale)];
+        assert_eq!(groups(&h, &pairs), vec![vec![0, 3, 4], vec![1], vec![2]]);
+        assert_eq!(groups(&h, &[]).len(), 5);
+    }
 }

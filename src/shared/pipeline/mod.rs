@@ -43,6 +43,7 @@ use substep::{Member, SubstepStats};
 
 use std::time::Instant;
 
+use super::body::Deformable;
 use super::contact::soft::{self, SoftSurface};
 use super::contact::{Candidate, ContactMaterial, ContactPoint, Scan};
 use super::coupling::{self, BodyMotion, RigidBackup};
@@ -302,20 +303,18 @@ impl DeformablePipeline {
             &mut work.pairs,
         );
         let handles: Vec<DeformableHandle> = deformables.iter().map(|(h, _)| h).collect();
-        for group in soft::groups(&handles, &work.pairs) {
+        let groups = soft::groups(&handles, &work.pairs);
+        // Every body, once, to be handed to its group.
+        let mut slots: Vec<Option<&mut Deformable>> =
+            deformables.iter_mut().map(|(_, b)| Some(b)).collect();
+        for group in groups {
             if work.scratches.len() < group.len() {
                 work.scratches.resize_with(group.len(), Scratch::default);
             }
-            let mut next = group.iter().map(|&k| handles[k]).peekable();
-            let mut chosen = Vec::with_capacity(group.len());
-            for (h, body) in deformables.iter_mut() {
-                if next.peek() == Some(&h) {
-                    next.next();
-                    chosen.push((h, body));
-                }
-            }
+            let chosen = group
+                .iter()
+                .filter_map(|&k| Some((handles[k], slots[k].take()?)));
             let mut members: Vec<Member<'_, '_>> = chosen
-                .into_iter()
                 .zip(work.scratches.iter_mut())
                 .map(|((handle, body), sc)| Member {
                     handle,
@@ -374,13 +373,9 @@ fn step_group<'a>(
             m.sc.soft_surface.build(m.body, ctx.gravity, ctx.dt, still);
         }
         for i in 0..members.len() {
-            if !members[i].live {
-                continue;
+            if members[i].live {
+                soft_tables(members, i, ctx);
             }
-            let (start, cands) = soft_tables(members, i, ctx);
-            let sc = &mut *members[i].sc;
-            sc.soft_start = start;
-            sc.soft_cands = cands;
         }
     }
     // 3. substeps
@@ -391,13 +386,10 @@ fn step_group<'a>(
 }
 
 /// The soft-contact tables of member `i` against the other members' surfaces.
-fn soft_tables(
-    members: &[Member<'_, '_>],
-    i: usize,
-    ctx: &StepContext<'_>,
-) -> (Vec<u32>, Vec<(u32, u32)>) {
+fn soft_tables(members: &mut [Member<'_, '_>], i: usize, ctx: &StepContext<'_>) {
+    let mut start = std::mem::take(&mut members[i].sc.soft_start);
+    let mut cands = std::mem::take(&mut members[i].sc.soft_cands);
     let m = &members[i];
-    let (mut start, mut cands) = (Vec::new(), Vec::new());
     let others = members
         .iter()
         .enumerate()
@@ -405,7 +397,8 @@ fn soft_tables(
         .map(|(j, o)| (j, &o.sc.soft_surface));
     let widen = 4.0 * m.sc.skin + ctx.margin;
     soft::node_tables(m.body, others, ctx.dt, widen, &mut start, &mut cands);
-    (start, cands)
+    members[i].sc.soft_start = start;
+    members[i].sc.soft_cands = cands;
 }
 
 /// Phases 4–7 of a member's step (or the report of one that slept or is frozen).
