@@ -6,7 +6,8 @@ use std::sync::mpsc::Sender;
 use super::rapier::geometry::ColliderHandle;
 use super::set::DeformableHandle;
 
-/// A deformable started or stopped touching a collider (any of its nodes or surface facets).
+/// A deformable started or stopped touching a collider (any of its nodes or surface facets), or
+/// another deformable.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
 pub enum DeformableContactEvent {
     /// The first step with a contact after a step without.
@@ -23,6 +24,21 @@ pub enum DeformableContactEvent {
         deformable: DeformableHandle,
         /// The collider.
         collider: ColliderHandle,
+    },
+    /// Two deformables touch (a node of either on a facet of the other) for the first step
+    /// after a step they did not; sent once per pair, after every body's events.
+    PairStarted {
+        /// The one with the smaller handle.
+        deformable: DeformableHandle,
+        /// The other.
+        other: DeformableHandle,
+    },
+    /// Two deformables stopped touching (also when one was removed); sent once per pair.
+    PairStopped {
+        /// The one with the smaller handle.
+        deformable: DeformableHandle,
+        /// The other.
+        other: DeformableHandle,
     },
 }
 

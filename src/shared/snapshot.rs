@@ -98,6 +98,7 @@ mod imp {
     use super::super::model::{Accumulator, ElementModel, ModelState};
     use super::super::rapier::geometry::ColliderHandle;
     use super::super::report::DeformableReport;
+    use super::super::set::DeformableHandle;
 
     /// What a mesh is saved as: the inputs of [`Mesh::new`].
     #[derive(Serialize, Deserialize)]
@@ -148,6 +149,9 @@ mod imp {
         attachments: Cow<'a, [Attachment]>,
         contacts: Cow<'a, [ContactPoint]>,
         touching: Cow<'a, [ColliderHandle]>,
+        /// Deformables touched in the last step (absent in older snapshots).
+        #[serde(default)]
+        touching_bodies: Cow<'a, [DeformableHandle]>,
         can_sleep: bool,
         sleeping: bool,
         still_time: Real,
@@ -174,6 +178,7 @@ mod imp {
                 attachments: Cow::Borrowed(self.bindings.list()),
                 contacts: Cow::Borrowed(&self.last.contacts),
                 touching: Cow::Borrowed(&self.last.touching),
+                touching_bodies: Cow::Borrowed(&self.last.touching_bodies),
                 can_sleep: self.activation.can_sleep,
                 sleeping: self.activation.sleeping,
                 still_time: self.activation.still_time,
@@ -260,6 +265,7 @@ mod imp {
                     report: self.report.into_owned(),
                     contacts: self.contacts.into_owned(),
                     touching: self.touching.into_owned(),
+                    touching_bodies: self.touching_bodies.into_owned(),
                 },
                 bindings,
                 contact: self.contact,

@@ -202,3 +202,35 @@ fn an_undamped_soft_soft_impact_creates_no_energy() {
         "energy rose from {before} J to {most} J"
     );
 }
+
+#[test]
+fn a_soft_soft_collision_sends_one_start_and_one_stop() {
+    use crate::dim::{ChannelEventCollector, DeformableContactEvent};
+    let (mut world, a, b) = collide(0.1);
+    let (sender, receiver) = std::sync::mpsc::channel();
+    let collector = ChannelEventCollector::new(sender);
+    let mut got = Vec::new();
+    for _ in 0..240 {
+        world.step_with_events(&collector);
+        got.extend(receiver.try_iter());
+    }
+    let (first, second) = if a.into_raw_parts() < b.into_raw_parts() {
+        (a, b)
+    } else {
+        (b, a)
+    };
+    assert_eq!(
+        got,
+        vec![
+            DeformableContactEvent::PairStarted {
+                deformable: first,
+                other: second
+            },
+            DeformableContactEvent::PairStopped {
+                deformable: first,
+                other: second
+            },
+        ],
+        "the cubes meet once and part"
+    );
+}

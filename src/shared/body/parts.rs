@@ -9,6 +9,7 @@ use super::super::mesh::Mesh;
 use super::super::model::{Accumulator, ElementModel, ModelState};
 use super::super::rapier::geometry::ColliderHandle;
 use super::super::report::DeformableReport;
+use super::super::set::DeformableHandle;
 
 /// What the body is made of: the rest mesh, the element model, the material and the lumped
 /// node masses. Fixed after build.
@@ -135,4 +136,6 @@ pub(crate) struct LastStep {
     pub contacts: Vec<ContactPoint>,
     /// Colliders touched, sorted.
     pub touching: Vec<ColliderHandle>,
+    /// Deformables touched (a node of either on a facet of the other), sorted.
+    pub touching_bodies: Vec<DeformableHandle>,
 }

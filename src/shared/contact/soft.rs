@@ -26,7 +26,7 @@
 //! once per step; each surface node of the others queries it with its own swept box.
 //!
 //! Not covered yet: edges of two coarse 3D meshes crossing with no node through a facet; a body
-//! against its own surface (self contact); contact events between deformables. A soft cube
+//! against its own surface (self contact). A soft cube
 //! resting on another keeps a slow sway (1–6 cm/s after 4 s in `tests/shared/soft.rs`, total
 //! energy constant): the stuck contact and the bodies' damping, which leaves a cell's rigid
 //! motion alone, take nothing from the upper body rocking as a whole, so the pair does not fall

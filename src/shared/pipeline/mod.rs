@@ -47,7 +47,7 @@ use super::body::Deformable;
 use super::contact::soft::{self, SoftSurface};
 use super::contact::{Candidate, ContactMaterial, ContactPoint, Scan};
 use super::coupling::{self, BodyMotion, RigidBackup};
-use super::events::DeformableEventHandler;
+use super::events::{DeformableContactEvent, DeformableEventHandler};
 use super::integrator::SymplecticEuler;
 use super::math::{Real, Vector};
 use super::rapier::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
@@ -130,6 +130,9 @@ struct Work {
     pushed: Vec<RigidBodyHandle>,
     /// Pairs of deformables that may touch this step.
     pairs: Vec<(DeformableHandle, DeformableHandle)>,
+    /// Pairs of deformables touching before and after this step (smaller handle first).
+    touching_before: Vec<(DeformableHandle, DeformableHandle)>,
+    touching_now: Vec<(DeformableHandle, DeformableHandle)>,
 }
 
 /// One body's buffers, reused from step to step.
@@ -302,6 +305,7 @@ impl DeformablePipeline {
             ctx.settings.sleep_speed,
             &mut work.pairs,
         );
+        touching_pairs(deformables, &mut work.touching_before);
         let handles: Vec<DeformableHandle> = deformables.iter().map(|(h, _)| h).collect();
         let groups = soft::groups(&handles, &work.pairs);
         // Every body, once, to be handed to its group.
@@ -325,6 +329,7 @@ impl DeformablePipeline {
                     stats: SubstepStats::default(),
                     live: false,
                     asleep: false,
+                    touched: Vec::new(),
                 })
                 .collect();
             step_group(&mut members, ctx, bodies, events, &mut self.report);
@@ -336,6 +341,24 @@ impl DeformablePipeline {
                 }
             }
         }
+        drop(slots);
+        touching_pairs(deformables, &mut work.touching_now);
+        pair_events(&work.touching_before, &work.touching_now, events);
+    }
+}
+
+/// `PairStopped` for each pair of `before` not in `now`, then `PairStarted` for each new one
+/// (a removed body's pairs stop; a sleeping body keeps its pairs).
+fn pair_events(
+    before: &[(DeformableHandle, DeformableHandle)],
+    now: &[(DeformableHandle, DeformableHandle)],
+    events: &dyn DeformableEventHandler,
+) {
+    for &(deformable, other) in before.iter().filter(|p| !now.contains(p)) {
+        events.handle_contact_event(DeformableContactEvent::PairStopped { deformable, other });
+    }
+    for &(deformable, other) in now.iter().filter(|p| !before.contains(p)) {
+        events.handle_contact_event(DeformableContactEvent::PairStarted { deformable, other });
     }
 }
 
@@ -380,9 +403,43 @@ fn step_group<'a>(
     }
     // 3. substeps
     substep::run(&SymplecticEuler, members, ctx, bodies);
+    record_touching(members);
     for (m, detached) in members.iter_mut().zip(detached) {
         finish_member(m, ctx, bodies, events, detached, report);
     }
+}
+
+/// The deformables each live member touched this step (either's node on the other's facet).
+fn record_touching(members: &mut [Member<'_, '_>]) {
+    let n = members.len();
+    for i in 0..n {
+        if !members[i].live {
+            continue;
+        }
+        let mut now: Vec<DeformableHandle> = (0..n)
+            .filter(|&j| members[i].touched.contains(&j) || members[j].touched.contains(&i))
+            .map(|j| members[j].handle)
+            .collect();
+        now.sort_unstable_by_key(|h| h.into_raw_parts());
+        members[i].body.last.touching_bodies = now;
+    }
+}
+
+/// The touching pairs of deformables, each once as (smaller handle, larger), sorted.
+fn touching_pairs(set: &DeformableSet, out: &mut Vec<(DeformableHandle, DeformableHandle)>) {
+    out.clear();
+    for (h, body) in set.iter() {
+        for &o in &body.last.touching_bodies {
+            let pair = if h.into_raw_parts() < o.into_raw_parts() {
+                (h, o)
+            } else {
+                (o, h)
+            };
+            out.push(pair);
+        }
+    }
+    out.sort_unstable_by_key(|(a, b)| (a.into_raw_parts(), b.into_raw_parts()));
+    out.dedup();
 }
 
 /// The soft-contact tables of member `i` against the other members' surfaces.

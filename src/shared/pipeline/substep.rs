@@ -75,6 +75,8 @@ pub(super) struct Member<'m, 'a> {
     pub live: bool,
     /// Asleep at the start of the step (reported as asleep, even if a push woke it).
     pub asleep: bool,
+    /// The members its nodes touched this step.
+    pub touched: Vec<usize>,
 }
 
 /// Runs the substeps of a group's step, the velocities advanced by `integrator`.
@@ -353,9 +355,11 @@ fn soft_contacts(members: &mut [Member<'_, '_>], live: &[usize], at: &Substep<'_
                 continue;
             };
             let (a, b) = pair_mut(members, i, hit.other);
-            let touched = soft::resolve(a.body, node, b.body, !b.live, &hit, at);
-            if touched {
+            if soft::resolve(a.body, node, b.body, !b.live, &hit, at) {
                 a.stats.soft_contacts += 1;
+                if !a.touched.contains(&hit.other) {
+                    a.touched.push(hit.other);
+                }
             }
         }
     }
