@@ -17,7 +17,8 @@
 //! another body (from `q0` to `q1 = q0 + h v`): the node ends the substep within a skin of the
 //! facet's plane or behind it, inside the facet's prism, having started in front of it or less
 //! than half the other body's shortest surface edge behind (deeper, a node is not this facet's
-//! business). Among its candidate facets the one it is most in front of wins (the face it comes
+//! business); a node that crosses the plane within the substep is tested at the crossing, so a
+//! fast one cannot pass beside the prism it ends in. Among its candidate facets the one it is most in front of wins (the face it comes
 //! through). A node found behind starts the substep on the plane. Its target is the normal
 //! relative velocity that closes the gap down to a skin, leaves the skin a tenth of the way per
 //! substep once within it, or is `−e · approach` for a bounce; friction is Coulomb's. The pair's `μ` and `e` combine both bodies' coefficients by rapier's rules.
@@ -50,6 +51,12 @@ pub(crate) struct SoftSurface {
 }
 
 impl SoftSurface {
+    /// How far a node's box is widened when it looks for this surface's facets: a quarter of
+    /// the body's shortest surface edge (forces can turn a node within the step).
+    pub fn margin(&self) -> Real {
+        0.5 * self.depth_limit
+    }
+
     /// The surface of `body` swept over the step under `gravity` (staying put if `still`).
     pub fn build(&mut self, body: &Deformable, gravity: Vector, dt: Real, still: bool) {
         let x = &body.state.positions;
@@ -271,7 +278,15 @@ pub(crate) fn find<'b>(
         if d0 < -surface.depth_limit || best.as_ref().is_some_and(|b| b.d0 >= d0) {
             continue;
         }
-        let w = math::facet_barycentric(&q1, p1);
+        // Where the node meets the facet: at the plane crossing when it crosses it within the
+        // substep (so a fast node cannot pass beside the prism it ends in), else at its end.
+        let tau = if d0 > 0.0 && d1 < 0.0 {
+            d0 / (d0 - d1)
+        } else {
+            1.0
+        };
+        let q: [Vector; FACET_ARITY] = std::array::from_fn(|a| q0[a] + (q1[a] - q0[a]) * tau);
+        let w = math::facet_barycentric(&q, p0 + (p1 - p0) * tau);
         if w.iter().any(|&w| w < -1e-3) {
             continue;
         }

@@ -452,7 +452,7 @@ fn soft_tables(members: &mut [Member<'_, '_>], i: usize, ctx: &StepContext<'_>) 
         .enumerate()
         .filter(move |(j, _)| *j != i)
         .map(|(j, o)| (j, &o.sc.soft_surface));
-    let widen = 4.0 * m.sc.skin + ctx.margin;
+    let widen = m.sc.soft_surface.margin() + ctx.margin;
     soft::node_tables(m.body, others, ctx.dt, widen, &mut start, &mut cands);
     members[i].sc.soft_start = start;
     members[i].sc.soft_cands = cands;
