@@ -43,6 +43,13 @@ const KEYS: &[(&str, &str)] = &[
     ("spurious_std", "f?"),
     ("spurious_max", "f?"),
     ("max_anchor_error", "f?"),
+    ("max_self_penetration", "f?"),
+    ("bodies", "u?"),
+    ("max_interpenetration", "f?"),
+    ("rest_interpenetration", "f?"),
+    ("energy_gain", "f?"),
+    ("final_speed", "f?"),
+    ("pairs_wall_s", "f?"),
     ("sag", "f?"),
     ("sag_theory", "f?"),
     ("sag_error", "f?"),
@@ -57,6 +64,7 @@ fn type_ok(v: &Value, t: &str) -> bool {
         "s" => v.is_string(),
         "s?" => v.is_string() || v.is_null(),
         "u" => v.is_u64(),
+        "u?" => v.is_u64() || v.is_null(),
         "f" => v.is_number(),
         "f?" => v.is_number() || v.is_null(),
         "b" => v.is_boolean(),
@@ -245,6 +253,69 @@ fn rotation_error_reports_the_spread() {
         assert!(l["spurious_mean"].as_f64().unwrap() >= 0.0);
         assert!(l["spurious_max"].as_f64().unwrap() >= l["spurious_mean"].as_f64().unwrap());
     }
+}
+
+#[test]
+fn contact_scenes_measure_interpenetration_energy_and_cost() {
+    for (scene, bodies) in [("stack", 2), ("squeeze", 3)] {
+        let lines = run(&[
+            scene,
+            "--seconds",
+            "0.2",
+            "--model",
+            "edge-repulsion",
+            "rapier-volume",
+        ]);
+        assert_eq!(lines.len(), 4, "{scene}: two models, two dimensions");
+        for l in &lines {
+            assert_eq!(l["scene"], scene);
+            assert_eq!(l["bodies"], bodies);
+            assert!(l["max_interpenetration"].as_f64().unwrap() >= 0.0);
+            assert!(l["energy_gain"].is_number() && l["rest_com"].is_number());
+        }
+    }
+    let lines = run(&[
+        "pile",
+        "--dim",
+        "3",
+        "--bodies",
+        "3",
+        "5",
+        "--seconds",
+        "0.2",
+        "--model",
+        "edge-repulsion",
+    ]);
+    let counts: Vec<u64> = lines
+        .iter()
+        .map(|l| l["bodies"].as_u64().unwrap())
+        .collect();
+    assert_eq!(counts, [3, 5]);
+    assert!(lines
+        .iter()
+        .all(|l| l["pairs_wall_s"].as_f64().unwrap() >= 0.0));
+    let lines = run(&[
+        "fold",
+        "--dim",
+        "2",
+        "--seconds",
+        "0.5",
+        "--model",
+        "edge-repulsion",
+    ]);
+    assert!(lines[0]["max_self_penetration"].is_number());
+    let lines = run(&[
+        "limb",
+        "--dim",
+        "2",
+        "--seconds",
+        "1",
+        "--model",
+        "edge-repulsion",
+        "--self-contact",
+        "on",
+    ]);
+    assert!(lines[0]["max_self_penetration"].is_number());
 }
 
 #[test]

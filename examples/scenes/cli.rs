@@ -28,6 +28,24 @@ pub enum Scene {
     RotationError,
     /// A clamped beam sagging under its own weight, against Euler–Bernoulli.
     Cantilever,
+    /// A soft cube dropped on another on the ground.
+    Stack,
+    /// Soft cubes dropped into a trimesh bowl (`--bodies`, default 10).
+    Pile,
+    /// A soft ball squeezed between two soft pads by a box (`--mass`, default 10 kg).
+    Squeeze,
+    /// A sausage folded double on a table, self contact on (`--self-contact off` to compare);
+    /// `--seconds` is the fold and the hold together.
+    Fold,
+}
+
+/// On or off.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Switch {
+    /// On.
+    On,
+    /// Off.
+    Off,
 }
 
 /// Runs the paper's scenes with sinew's models and rapier's soft bodies.
@@ -70,6 +88,12 @@ pub struct Args {
     /// Strikes of the manipulator (default 20).
     #[arg(long)]
     pub strikes: Option<usize>,
+    /// Bodies of the pile, one run per count (default: 10).
+    #[arg(long, num_args = 1..)]
+    pub bodies: Vec<usize>,
+    /// Self contact of sinew's bodies in the fold (default on) and the limb (default off).
+    #[arg(long, value_enum)]
+    pub self_contact: Option<Switch>,
     /// k/m of the rotation-error element, 1/s² (default: 1e4 1e5 1e6).
     #[arg(long, num_args = 1..)]
     pub k_over_m: Vec<f64>,
@@ -167,7 +191,7 @@ impl Drop for Progress {
 /// The record as a JSON object: every key always present, `null` where it does not apply.
 pub fn to_json(r: &Record) -> Value {
     let spurious = r.spurious;
-    json!({
+    let mut object = json!({
         "scene": r.scene,
         "dim": r.dim,
         "model": r.model,
@@ -201,6 +225,7 @@ pub fn to_json(r: &Record) -> Value {
         "spurious_std": spurious.map(|s| s.std),
         "spurious_max": spurious.map(|s| s.max),
         "max_anchor_error": r.max_anchor_error,
+        "max_self_penetration": r.max_self_penetration,
         "sag": r.sag,
         "sag_theory": r.sag_theory,
         "sag_error": r.sag_error,
@@ -208,7 +233,20 @@ pub fn to_json(r: &Record) -> Value {
         "final_kinetic_energy": r.final_kinetic_energy,
         "nan": r.nan,
         "exploded": r.exploded,
-    })
+    });
+    // The contact scenes' keys (one `json!` of every key passes the macro's recursion limit).
+    let contact = json!({
+        "bodies": r.bodies,
+        "max_interpenetration": r.max_interpenetration,
+        "rest_interpenetration": r.rest_interpenetration,
+        "energy_gain": r.energy_gain,
+        "final_speed": r.final_speed,
+        "pairs_wall_s": r.pairs_wall_s,
+    });
+    if let (Some(all), Value::Object(more)) = (object.as_object_mut(), contact) {
+        all.extend(more);
+    }
+    object
 }
 
 fn opt(v: Option<f64>, digits: usize) -> String {
@@ -218,12 +256,16 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 fn table_header(scene: Scene) -> String {
     let extra = match scene {
         Scene::Fall => "  apex m  rest m   pen mm",
-        Scene::Limb => " failure°  anchor m",
+        Scene::Limb => " failure°  anchor m  self mm",
         Scene::Crush => "    mass kg  pen mm  shape err  failure kg",
         Scene::Manipulator => "  rest m  shape err  failure strike",
         Scene::DtSweep => "  mode   dt ms  apex m  rest m   pen mm  failure ms",
         Scene::RotationError => "  k/m      dt ms  mean rad/s²  std rad/s²  max rad/s²",
         Scene::Cantilever => "  sag mm  theory mm  ratio   error  wobble",
+        Scene::Stack | Scene::Pile | Scene::Squeeze => {
+            " bodies  inside mm  at rest mm  E gain   speed  rest m  pairs ms/s"
+        }
+        Scene::Fold => "  self mm",
     };
     format!(
         "dim {:<23} {:>5} {:>6} {:>6} {:>9} {:>9} {:>9} {:>7}{extra}  flags",
@@ -240,11 +282,23 @@ fn table_row(scene: Scene, r: &Record) -> String {
             opt(r.max_penetration.map(|p| p * 1e3), 2)
         ),
         Scene::Limb => format!(
-            " {:>9}  {:>8}",
+            " {:>9}  {:>8}  {:>7}",
             opt(r.first_failure, 1),
             r.max_anchor_error
-                .map_or("—".to_string(), |e| format!("{e:.1e}"))
+                .map_or("—".to_string(), |e| format!("{e:.1e}")),
+            opt(r.max_self_penetration.map(|p| p * 1e3), 3)
         ),
+        Scene::Stack | Scene::Pile | Scene::Squeeze => format!(
+            " {:>6}  {:>9}  {:>10}  {:>6}  {:>6}  {:>6}  {:>10}",
+            r.bodies.unwrap_or(0),
+            opt(r.max_interpenetration.map(|p| p * 1e3), 2),
+            opt(r.rest_interpenetration.map(|p| p * 1e3), 2),
+            opt(r.energy_gain.map(|e| e * 100.0), 2) + "%",
+            opt(r.final_speed, 3),
+            opt(r.rest_com, 3),
+            opt(r.pairs_wall_s.map(|p| p * 1e3 / r.sim_s.max(1e-9)), 2)
+        ),
+        Scene::Fold => format!("  {:>7}", opt(r.max_self_penetration.map(|p| p * 1e3), 3)),
         Scene::Crush => format!(
             "  {:>9}  {:>6}  {:>9}  {:>10}",
             opt(r.mass, 0),
@@ -318,13 +372,14 @@ fn table_row(scene: Scene, r: &Record) -> String {
 macro_rules! dimension_runner {
     ($module:ident, $dim:ident) => {
         mod $module {
-            use super::{Args, Progress, Scene};
+            use super::{Args, Progress, Scene, Switch};
             use sinew::$dim::math::Real;
             use sinew::$dim::{DeformableWorld, ElementModel, RotationFit};
             use sinew_scenes::record::Record;
             use sinew_scenes::$dim::{
-                dt_sweep, CantileverScene, CrushScene, FallScene, LimbScene, ManipulatorScene,
-                RapierModel, RotationErrorScene, Subject, CRUSH_MASSES,
+                dt_sweep, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
+                ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
+                StackScene, Subject, CRUSH_MASSES,
             };
 
             fn fits(args: &Args) -> Result<Vec<RotationFit>, String> {
@@ -478,9 +533,66 @@ macro_rules! dimension_runner {
                                     .map_or(d.max_degrees, |s| s as Real * d.degrees_per_second),
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                                self_contact: args.self_contact == Some(Switch::On),
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
+                        }
+                        Scene::Stack => {
+                            let d = StackScene::default();
+                            let scene = StackScene {
+                                subject,
+                                resolution: args.res.unwrap_or(d.resolution),
+                                dt: args.dt.map_or(d.dt, |v| v as Real),
+                                seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                                ..d
+                            };
+                            vec![scene.run().map_err(err)?]
+                        }
+                        Scene::Pile => {
+                            let d = PileScene::default();
+                            let counts = if args.bodies.is_empty() {
+                                vec![d.bodies]
+                            } else {
+                                args.bodies.clone()
+                            };
+                            let mut out = Vec::new();
+                            for bodies in counts {
+                                let scene = PileScene {
+                                    subject,
+                                    bodies,
+                                    resolution: args.res.unwrap_or(d.resolution),
+                                    dt: args.dt.map_or(d.dt, |v| v as Real),
+                                    seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                                    ..d
+                                };
+                                out.push(scene.run().map_err(err)?);
+                            }
+                            out
+                        }
+                        Scene::Squeeze => {
+                            let d = SqueezeScene::default();
+                            let scene = SqueezeScene {
+                                subject,
+                                load: args.mass.first().map_or(d.load, |&m| m as Real),
+                                dt: args.dt.map_or(d.dt, |v| v as Real),
+                                seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                                ..d
+                            };
+                            vec![scene.run().map_err(err)?]
+                        }
+                        Scene::Fold => {
+                            let d = FoldScene::default();
+                            let scene = FoldScene {
+                                subject,
+                                self_contact: args.self_contact != Some(Switch::Off),
+                                dt: args.dt.map_or(d.dt, |v| v as Real),
+                                fold_seconds: args
+                                    .seconds
+                                    .map_or(d.fold_seconds, |s| 0.5 * s as Real),
+                                ..d
+                            };
+                            vec![scene.run().map_err(err)?]
                         }
                         Scene::Crush => {
                             let d = CrushScene::default();

@@ -32,6 +32,10 @@ pub struct DeformableReport {
     /// substeps.
     #[cfg_attr(feature = "serde", serde(default))]
     pub soft_contacts: usize,
+    /// Contacts of its surface nodes with its own surface facets (self contact), over the
+    /// step's substeps.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub self_contacts: usize,
     /// Nodes bound to rigid bodies.
     pub attached_nodes: usize,
     /// Bindings dropped at the start of the step because their body was removed.
@@ -82,6 +86,10 @@ pub struct StepReport {
     pub deformables: Vec<(DeformableHandle, DeformableReport)>,
     /// Wall time of the whole step, s.
     pub wall_time: f64,
+    /// Wall time of finding the deformables that may touch each other and grouping them (the
+    /// broad phase between deformables), s.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub pairs_time: f64,
 }
 
 impl StepReport {

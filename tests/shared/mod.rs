@@ -25,6 +25,7 @@ mod pipeline;
 mod properties;
 mod query;
 mod scenes;
+mod self_contact;
 mod shapes;
 mod sleep;
 mod snapshot;

@@ -5,3 +5,30 @@ use sinew::dim3 as lib;
 #[path = "shared/mod.rs"]
 mod shared;
 pub use shared::*;
+
+/// Level geometry whose construction differs per dimension.
+pub(crate) mod level {
+    use sinew::dim3::math::{Real, Vector};
+    use sinew::dim3::rapier::geometry::ColliderBuilder;
+
+    /// An open square bowl as a trimesh: a floor `width` wide at height 0 and four walls
+    /// sloping out at 45° up to `height`, normals inwards.
+    pub fn bowl(width: Real, height: Real) -> ColliderBuilder {
+        let (a, b) = (0.5 * width, 0.5 * width + height);
+        let mut vertices = Vec::new();
+        for (h, r) in [(0.0, a), (height, b)] {
+            for (x, z) in [(-r, -r), (r, -r), (r, r), (-r, r)] {
+                vertices.push(Vector::new(x, h, z));
+            }
+        }
+        // Floor (0..4), counter-clockwise seen from above; then each wall from floor edge
+        // (i, i+1) to rim edge (4+i, 4+i+1), facing the inside.
+        let mut indices = vec![[0, 2, 1], [0, 3, 2]];
+        for i in 0..4u32 {
+            let j = (i + 1) % 4;
+            indices.push([i, j, 4 + j]);
+            indices.push([i, 4 + j, 4 + i]);
+        }
+        ColliderBuilder::trimesh(vertices, indices).expect("a valid bowl")
+    }
+}

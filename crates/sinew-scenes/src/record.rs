@@ -47,7 +47,9 @@ pub struct Record {
     pub iterations: Option<String>,
     /// Nodes per edge of the lattice (cantilever: nodes across the beam's thickness).
     pub res: usize,
-    /// Nodes (particles) of the body.
+    /// Soft bodies in the scene (the multi-body scenes: stack, pile, squeeze).
+    pub bodies: Option<usize>,
+    /// Nodes (particles) of the body (of all bodies).
     pub nodes: usize,
     /// Cells of the body.
     pub elements: usize,
@@ -95,6 +97,21 @@ pub struct Record {
     pub shape_error: Option<f64>,
     /// Volume over rest volume at the end of a static load (the crush hold).
     pub loaded_volume_ratio: Option<f64>,
+    /// Deepest a surface node went inside the body's own surface over the run
+    /// (`metrics::self_interpenetration`, up to half a cell deep), m (fold, limb).
+    pub max_self_penetration: Option<f64>,
+    /// Deepest a surface node of one body went inside another over the run
+    /// (`metrics::interpenetration`), m (stack, pile, squeeze).
+    pub max_interpenetration: Option<f64>,
+    /// The same over the run's last second, m.
+    pub rest_interpenetration: Option<f64>,
+    /// Largest rise of the kinetic plus gravitational energy over its start, relative (stack,
+    /// pile, squeeze; the box's energy not counted).
+    pub energy_gain: Option<f64>,
+    /// Fastest node at the end, m/s.
+    pub final_speed: Option<f64>,
+    /// Wall time spent finding the pairs of deformables that may touch, s (sinew only).
+    pub pairs_wall_s: Option<f64>,
     /// Largest distance of a pinned node from its anchor on its bone, m (limb).
     pub max_anchor_error: Option<f64>,
     /// Spurious angular acceleration of the element forces, rad/s² (rotation-error).

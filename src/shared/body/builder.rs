@@ -41,6 +41,7 @@ pub struct DeformableBuilder {
     groups: InteractionGroups,
     ignore_attached_bodies: bool,
     can_sleep: bool,
+    self_contact: bool,
     deny_warnings: bool,
     user_data: u128,
 }
@@ -78,6 +79,7 @@ impl DeformableBuilder {
             groups: InteractionGroups::all(),
             ignore_attached_bodies: true,
             can_sleep: true,
+            self_contact: false,
             deny_warnings: false,
             user_data: 0,
         }
@@ -180,6 +182,18 @@ impl DeformableBuilder {
     /// thresholds in [`PipelineSettings`](super::super::PipelineSettings)).
     pub fn can_sleep(mut self, can_sleep: bool) -> Self {
         self.can_sleep = can_sleep;
+        self
+    }
+
+    /// Whether the body's surface meets itself (default `false`): on, a surface node is kept
+    /// out of the body's own surface facets as it is kept out of another deformable's
+    /// (`docs/ARCHITECTURE.md` §6.6), except the facets of the nodes it shares a cell with. Turn it on for a body that folds onto itself (a limb's crease,
+    /// a long body bent double, a sheet); a compact body under moderate loads cannot fold and
+    /// does not need it. It costs about what contact with a second body of the same surface
+    /// costs: its facets' hierarchy is rebuilt every step, every surface node queries it, and
+    /// every substep tests each node against the facets near it.
+    pub fn self_contact(mut self, on: bool) -> Self {
+        self.self_contact = on;
         self
     }
 
@@ -294,6 +308,7 @@ impl DeformableBuilder {
                 restitution_combine_rule: self.restitution_combine_rule,
                 groups: self.groups,
                 ignore_attached_bodies: self.ignore_attached_bodies,
+                self_contact: self.self_contact,
             },
             gravity_scale: self.gravity_scale,
             user_data: self.user_data,

@@ -249,6 +249,16 @@ impl Deformable {
         }
     }
 
+    /// Whether the body's surface meets itself (see [`DeformableBuilder::self_contact`]).
+    pub fn self_contact(&self) -> bool {
+        self.contact.self_contact
+    }
+
+    /// Turns self contact on or off.
+    pub fn set_self_contact(&mut self, on: bool) {
+        self.contact.self_contact = on;
+    }
+
     /// Sets all node positions. Errors if the count differs or a coordinate is not finite; the
     /// state is unchanged then.
     pub fn set_positions(&mut self, positions: &[Vector]) -> Result<(), BuildError> {

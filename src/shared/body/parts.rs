@@ -2,6 +2,9 @@
 //! `RigidBody`'s: what it is made of (fixed after build), its state, the step's working
 //! buffers, whether it is simulated, and what the last step found.
 
+use std::sync::OnceLock;
+
+use super::super::contact::soft::NearFacets;
 use super::super::contact::ContactPoint;
 use super::super::material::Resolved;
 use super::super::math::{Real, Vector};
@@ -22,6 +25,8 @@ pub(crate) struct Rest {
     pub masses: Vec<Real>,
     /// Their inverses.
     pub inv_masses: Vec<Real>,
+    /// The facets each surface node leaves alone in self contact, made when first needed.
+    near_facets: OnceLock<NearFacets>,
 }
 
 impl Rest {
@@ -43,7 +48,14 @@ impl Rest {
             params,
             masses,
             inv_masses,
+            near_facets: OnceLock::new(),
         }
+    }
+
+    /// The facets each surface node leaves alone in self contact (its own and its
+    /// neighbours'), made on first use.
+    pub fn near_facets(&self) -> &NearFacets {
+        self.near_facets.get_or_init(|| NearFacets::new(&self.mesh))
     }
 }
 

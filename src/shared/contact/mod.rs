@@ -82,6 +82,9 @@ pub(crate) struct ContactMaterial {
     pub restitution_combine_rule: CoefficientCombineRule,
     pub groups: InteractionGroups,
     pub ignore_attached_bodies: bool,
+    /// Whether the body's surface nodes meet its own surface facets.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub self_contact: bool,
 }
 
 /// A contact between a deformable and a collider.

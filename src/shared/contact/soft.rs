@@ -10,32 +10,44 @@
 //! never more than stops the approach, so no energy is created. (Stepping the bodies one after
 //! another, each meeting the others as obstacles whose reactions waited for their next step,
 //! created energy: a node stopped against a facet that could not give way this step, of a
-//! lighter body, gained `½ m₁u² (m₁/m₂ − 1)`.) A sleeping or frozen member is a still surface:
-//! it gives no way, and a push faster than the sleep speed wakes it.
+//! lighter body, gained `½ m₁u² (m₁/m₂ − 1)`.) A sleeping member is a still surface: it gives
+//! no way, and a push faster than the sleep speed wakes it. A frozen (blown-up) body meets no
+//! other.
 //!
 //! **A contact**, each substep, for a node (moving from `p0` to `p1 = p0 + h v`) and a facet of
 //! another body (from `q0` to `q1 = q0 + h v`): the node ends the substep within a skin of the
 //! facet's plane or behind it, inside the facet's prism, having started in front of it or less
-//! than half the other body's shortest surface edge behind (deeper, a node is not this facet's
-//! business); a node that crosses the plane within the substep is tested at the crossing, so a
-//! fast one cannot pass beside the prism it ends in. Among its candidate facets the one it is most in front of wins (the face it comes
-//! through). A node found behind starts the substep on the plane. Its target is the normal
-//! relative velocity that closes the gap down to a skin, leaves the skin a tenth of the way per
-//! substep once within it, or is `−e · approach` for a bounce; friction is Coulomb's. The pair's `μ` and `e` combine both bodies' coefficients by rapier's rules.
+//! than half the facet body's shortest rest surface edge behind (deeper, a node is not this
+//! facet's business); a node that crosses the plane within the substep is tested at the
+//! crossing, so a fast one cannot pass beside the prism it ends in. Every facet a node meets is
+//! solved, in turn, the one it is most in front of (the face it comes through) first: a node
+//! in a crease meets both sides. A node found behind starts the substep on the plane. Its
+//! target is the normal relative velocity that closes the gap down to a skin, leaves the skin
+//! a tenth of the way per substep once within it, or is `−e · approach` for a bounce; friction
+//! is Coulomb's. The pair's `μ` and `e` combine both bodies' coefficients by rapier's rules.
+//!
+//! **Self contact** ([`DeformableBuilder::self_contact`](super::super::DeformableBuilder::self_contact)):
+//! a body's nodes meet its own facets in the same way, all but the facets a node lies on
+//! ([`NearFacets`]), with its own coefficients. The facets next to a node's own are met: the
+//! crushed inner side of a fold buckles into wrinkles a cell wide whose nodes pass into their
+//! neighbours' facets (a sausage folded double went 4 mm into itself when they were left
+//! out); the depth limit keeps a node at a sharp corner of the rest shape from being pushed
+//! through the face beside it.
 //!
 //! **Broad phase.** Each body's facet boxes swept over the step go into a BVH (parry's), built
-//! once per step; each surface node of the others queries it with its own swept box.
+//! once per step; each surface node of the others (and of itself, with self contact) queries
+//! it with its own swept box.
 //!
-//! Not covered yet: edges of two coarse 3D meshes crossing with no node through a facet; a body
-//! against its own surface (self contact). A soft cube
-//! resting on another keeps a slow sway (1–6 cm/s after 4 s in `tests/shared/soft.rs`, total
-//! energy constant): the stuck contact and the bodies' damping, which leaves a cell's rigid
-//! motion alone, take nothing from the upper body rocking as a whole, so the pair does not fall
-//! asleep.
+//! Not covered yet: edges of two coarse 3D meshes crossing with no node through a facet. A
+//! soft cube resting on another keeps a slow sway (1–6 cm/s after 4 s in
+//! `tests/shared/soft.rs`, total energy constant): the stuck contact and the bodies' damping,
+//! which leaves a cell's rigid motion alone, take nothing from the upper body rocking as a
+//! whole, so the pair does not fall asleep.
 
 use super::super::body::Deformable;
 use super::super::coupling::Substep;
-use super::super::math::{self, Real, Vector, FACET_ARITY};
+use super::super::math::{self, Real, Vector, FACET_ARITY, SIMPLEX_ARITY};
+use super::super::mesh::{CellKind, Mesh};
 use super::super::rapier::dynamics::CoefficientCombineRule;
 use super::super::rapier::geometry::{Aabb, BoundingVolume};
 use super::super::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
@@ -46,7 +58,8 @@ use super::super::set::{DeformableHandle, DeformableSet};
 pub(crate) struct SoftSurface {
     /// The facets' boxes swept over the step (leaf = boundary facet index).
     tree: Bvh,
-    /// Deeper than this behind a facet, a node is not pushed out through it.
+    /// Deeper than this behind a facet, a node is not pushed out through it: half the body's
+    /// shortest surface edge at rest.
     depth_limit: Real,
 }
 
@@ -76,7 +89,10 @@ impl SoftSurface {
                     if !still {
                         b.take_point(x[i] + v[i] * dt + g * (0.5 * dt * dt));
                     }
-                    shortest = shortest.min(x[i].distance(x[f[(a + 1) % FACET_ARITY] as usize]));
+                    // At rest: a crushed fold's short edges must not shrink the limit.
+                    let rest = body.rest.mesh.nodes();
+                    shortest =
+                        shortest.min(rest[i].distance(rest[f[(a + 1) % FACET_ARITY] as usize]));
                 }
                 b
             })
@@ -90,9 +106,74 @@ impl SoftSurface {
     }
 }
 
+/// Per surface node (in the order of [`Mesh::boundary_nodes`]): the surface facets it does not
+/// meet in self contact, ascending: its own (it lies on them). A facet next to its own is met:
+/// the crushed inner side of a fold buckles into wrinkles a cell wide, whose nodes pass into
+/// the neighbouring facets; a node behind a facet by more than half an edge is never met, so a
+/// node at a sharp corner of the rest shape is not pushed through the face beside it.
+///
+/// Also, per boundary facet, the cells around it (those with a node of it), ascending.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct NearFacets {
+    start: Vec<u32>,
+    facets: Vec<u32>,
+    cells_start: Vec<u32>,
+    cells: Vec<u32>,
+}
+
+impl NearFacets {
+    pub fn new(mesh: &Mesh) -> Self {
+        let n = mesh.nodes().len();
+        let mut facets_of: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for (f, facet) in mesh.boundary_facets().iter().enumerate() {
+            for &i in facet {
+                facets_of[i as usize].push(f as u32);
+            }
+        }
+        let mut cells_of: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for (c, cell) in mesh.cells().enumerate() {
+            for &i in cell {
+                cells_of[i as usize].push(c as u32);
+            }
+        }
+        let mut out = NearFacets {
+            start: vec![0],
+            facets: Vec::new(),
+            cells_start: vec![0],
+            cells: Vec::new(),
+        };
+        for &i in mesh.boundary_nodes() {
+            out.facets.extend_from_slice(&facets_of[i as usize]);
+            out.start.push(out.facets.len() as u32);
+        }
+        let mut around = Vec::new();
+        for facet in mesh.boundary_facets() {
+            around.clear();
+            for &i in facet {
+                around.extend_from_slice(&cells_of[i as usize]);
+            }
+            around.sort_unstable();
+            around.dedup();
+            out.cells.extend_from_slice(&around);
+            out.cells_start.push(out.cells.len() as u32);
+        }
+        out
+    }
+
+    /// The cells around boundary facet `f` (those with a node of it).
+    pub fn cells_around(&self, f: usize) -> &[u32] {
+        &self.cells[self.cells_start[f] as usize..self.cells_start[f + 1] as usize]
+    }
+
+    /// The facets surface node `k` (an index into the boundary nodes) leaves alone.
+    pub fn of(&self, k: usize) -> &[u32] {
+        &self.facets[self.start[k] as usize..self.start[k + 1] as usize]
+    }
+}
+
 /// The pairs of deformables that may touch this step, from their boxes swept over the step (a
-/// BVH over the bodies' boxes, one query each), by their collision groups; both asleep, a pair
-/// is left out. Also wakes a sleeping body that a moving one comes near.
+/// BVH over the bodies' boxes, one query each), by their collision groups; both asleep, or
+/// either frozen, a pair is left out. Also wakes a sleeping body that a moving one comes near.
 pub(crate) fn pairs(
     set: &mut DeformableSet,
     dt: Real,
@@ -133,7 +214,9 @@ pub(crate) fn pairs(
             }
             let (hb, _, moving_b) = bodies[b];
             let (da, db) = (&set[*ha], &set[hb]);
-            if !da.contact.groups.test(db.contact.groups) {
+            // A frozen body blew up: its last finite state is no shape to meet.
+            let frozen = da.activation.frozen || db.activation.frozen;
+            if frozen || !da.contact.groups.test(db.contact.groups) {
                 continue;
             }
             let (sleep_a, sleep_b) = (da.activation.sleeping, db.activation.sleeping);
@@ -199,10 +282,12 @@ pub(crate) fn groups(
 }
 
 /// Per surface node of `body` (CSR): the facets of the other members' surfaces its box swept
-/// over the step meets, as `(member, facet)`, ascending.
+/// over the step meets, as `(member, facet)`, ascending; with `own` (the body's member index
+/// and surface, for self contact), its own facets too, but for those it leaves alone.
 pub(crate) fn node_tables<'s>(
     body: &Deformable,
     others: impl Iterator<Item = (usize, &'s SoftSurface)> + Clone,
+    own: Option<(usize, &SoftSurface)>,
     dt: Real,
     widen: Real,
     start: &mut Vec<u32>,
@@ -211,7 +296,8 @@ pub(crate) fn node_tables<'s>(
     start.clear();
     cands.clear();
     start.push(0);
-    for &i in body.rest.mesh.boundary_nodes() {
+    let near = own.map(|_| body.rest.near_facets());
+    for (k, &i) in body.rest.mesh.boundary_nodes().iter().enumerate() {
         if !body.is_attached(i) {
             let (x, v) = (
                 body.state.positions[i as usize],
@@ -224,6 +310,16 @@ pub(crate) fn node_tables<'s>(
             let begin = cands.len();
             for (m, surface) in others.clone() {
                 cands.extend(surface.tree.intersect_aabb(&b).map(|f| (m as u32, f)));
+            }
+            if let (Some((m, surface)), Some(near)) = (own, near) {
+                let skip = near.of(k);
+                cands.extend(
+                    surface
+                        .tree
+                        .intersect_aabb(&b)
+                        .filter(|f| skip.binary_search(f).is_err())
+                        .map(|f| (m as u32, f)),
+                );
             }
             cands[begin..].sort_unstable();
         }
@@ -241,24 +337,31 @@ pub(crate) struct SoftHit {
     normal: Vector,
     /// Signed distance of the node from the facet's plane at the start (negative: behind).
     d0: Real,
+    /// The facet's plane at the start: a point and the normal.
+    plane: (Vector, Vector),
+    /// The facet body's depth limit.
+    depth_limit: Real,
 }
 
-/// The facet of the candidates `cands` that `node` of `body_of(i)` meets in this substep (see
-/// the module docs); `body_of(j)` gives member `j`'s body and surface.
+/// The facets of the candidates `cands` that `node` of `body_of(i)` meets in this substep (see
+/// the module docs), into `out`: the one it is most in front of first (the face it comes
+/// through), then the others it would end behind; `body_of(j)` gives member `j`'s body and
+/// surface.
 pub(crate) fn find<'b>(
     body_of: impl Fn(usize) -> (&'b Deformable, &'b SoftSurface),
     i: usize,
     node: u32,
     cands: &[(u32, u32)],
     at: &Substep<'_>,
-) -> Option<SoftHit> {
+    out: &mut Vec<SoftHit>,
+) {
+    out.clear();
     let h = at.h;
     let (body, _) = body_of(i);
     let n_i = node as usize;
     let p0 = body.state.positions[n_i];
     let p1 = p0 + body.state.velocities[n_i] * h;
     let skin = at.skin;
-    let mut best: Option<SoftHit> = None;
     for &(m, f) in cands {
         let (other, surface) = body_of(m as usize);
         let facet = other.rest.mesh.boundary_facets()[f as usize];
@@ -275,7 +378,14 @@ pub(crate) fn find<'b>(
         }
         let n0 = math::facet_normal(&q0).normalize_or(n1);
         let d0 = (p0 - q0[0]).dot(n0);
-        if d0 < -surface.depth_limit || best.as_ref().is_some_and(|b| b.d0 >= d0) {
+        if d0 < -surface.depth_limit {
+            continue;
+        }
+        // Behind the plane, a node is inside the body only if it is inside a cell around the
+        // facet (near a corner, a point outside the body is behind the plane of a facet beside
+        // it, and stepping it out onto that plane threw it sideways: a pile of ten coarse
+        // cubes gained 20 J in one step).
+        if d0 < 0.0 && !inside_near_facet(other, f as usize, p0) {
             continue;
         }
         // Where the node meets the facet: at the plane crossing when it crosses it within the
@@ -292,19 +402,43 @@ pub(crate) fn find<'b>(
         }
         let w = w.map(|w| w.max(0.0));
         let total: Real = w.iter().sum();
-        best = Some(SoftHit {
+        out.push(SoftHit {
             other: m as usize,
             facet,
             weights: w.map(|w| w / total),
             normal: n1,
             d0,
+            plane: (q0[0], n0),
+            depth_limit: surface.depth_limit,
         });
     }
-    best
+    out.sort_unstable_by(|a, b| b.d0.total_cmp(&a.d0));
+}
+
+/// Whether `p` is inside (or on) a cell of `body` around its boundary facet `f` (one that
+/// has a node of it), at the current positions; with box cells, always.
+fn inside_near_facet(body: &Deformable, f: usize, p: Vector) -> bool {
+    let mesh = &body.rest.mesh;
+    if mesh.kind() != CellKind::Simplex {
+        return true;
+    }
+    let x = &body.state.positions;
+    body.rest.near_facets().cells_around(f).iter().any(|&c| {
+        let cell = mesh.cell(c as usize);
+        let q: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[cell[a] as usize]);
+        let whole = math::simplex_volume(&q);
+        whole > 0.0
+            && (0..SIMPLEX_ARITY).all(|k| {
+                let mut r = q;
+                r[k] = p;
+                math::simplex_volume(&r) >= -1e-6 * whole
+            })
+    })
 }
 
 /// Solves a contact [`find`] found between `node` of `body` and a facet of `other` (which
-/// gives no way if `still`); returns whether an impulse was applied.
+/// gives no way if `still`), on the velocities as the contacts solved before it left them;
+/// returns whether an impulse was applied.
 pub(crate) fn resolve(
     body: &mut Deformable,
     node: u32,
@@ -313,7 +447,6 @@ pub(crate) fn resolve(
     hit: &SoftHit,
     at: &Substep<'_>,
 ) -> bool {
-    let (h, skin) = (at.h, at.skin);
     let i = node as usize;
     let n = hit.normal;
     let inv_of = |b: &Deformable, j: u32| {
@@ -339,10 +472,7 @@ pub(crate) fn resolve(
         return false;
     }
     // A node found behind the facet starts the substep on it.
-    if hit.d0 < 0.0 {
-        body.state.positions[i] -= n * hit.d0;
-    }
-    let d0 = hit.d0.max(0.0);
+    let d0 = step_out(&mut body.state.positions[i], hit);
     let facet_velocity = |vel: &[Vector]| -> Vector {
         (0..FACET_ARITY)
             .map(|a| vel[hit.facet[a] as usize] * hit.weights[a])
@@ -363,25 +493,8 @@ pub(crate) fn resolve(
     );
     let approach =
         (body.step.scratch_velocities[i] - facet_velocity(&other.step.scratch_velocities)).dot(n);
-    // Close the gap down to the skin; within the skin, stop approaching and leave it slowly (a
-    // tenth of the way per substep: pushing out at once pumped a stacked pair into rocking).
-    let gap = d0 - skin;
-    let mut target = if gap >= 0.0 { -gap / h } else { -0.1 * gap / h };
-    if -approach > at.restitution_threshold && restitution > 0.0 {
-        target = target.max(-restitution * approach);
-    }
     let rel = body.state.velocities[i] - facet_velocity(&other.state.velocities);
-    let vn = rel.dot(n);
-    let normal_impulse = ((target - vn) / k).max(0.0);
-    let mut impulse = n * normal_impulse;
-    if friction > 0.0 {
-        let after = rel + n * (normal_impulse * k);
-        let vt = after - n * after.dot(n);
-        let slip = vt.length();
-        if slip > 0.0 {
-            impulse -= vt * ((slip / k).min(friction * normal_impulse) / slip);
-        }
-    }
+    let impulse = contact_impulse(hit, d0, k, approach, rel, (friction, restitution), at);
     if impulse == Vector::ZERO {
         return false;
     }
@@ -397,6 +510,103 @@ pub(crate) fn resolve(
         for ((&j, &w), &inv) in hit.facet.iter().zip(&hit.weights).zip(&w_facet) {
             other.state.velocities[j as usize] -= impulse * (w * inv);
         }
+    }
+    true
+}
+
+/// Moves a node found behind a facet out onto the facet's plane (at most the facet body's
+/// depth limit); returns its distance from the plane after, from where it is now: a contact
+/// solved before this one (the node's other facets, the facet's other nodes) may have moved it
+/// out already, and an old depth would throw it sideways.
+fn step_out(x: &mut Vector, hit: &SoftHit) -> Real {
+    let (point, normal) = hit.plane;
+    let d = (*x - point).dot(normal);
+    if d >= 0.0 {
+        return d;
+    }
+    let shift = (-d).min(hit.depth_limit);
+    *x += hit.normal * shift;
+    d + shift
+}
+
+/// The impulse on the node (the facet takes its reverse) of a contact `d0` off the facet's
+/// plane, with effective inverse mass `k`, normal approach speed `approach` before this
+/// substep's forces, relative velocity `rel` now, and the pair's friction and restitution.
+fn contact_impulse(
+    hit: &SoftHit,
+    d0: Real,
+    k: Real,
+    approach: Real,
+    rel: Vector,
+    (friction, restitution): (Real, Real),
+    at: &Substep<'_>,
+) -> Vector {
+    let (h, skin, n) = (at.h, at.skin, hit.normal);
+    // Close the gap down to the skin; within the skin, stop approaching and leave it slowly (a
+    // tenth of the way per substep: pushing out at once pumped a stacked pair into rocking).
+    let gap = d0 - skin;
+    let mut target = if gap >= 0.0 { -gap / h } else { -0.1 * gap / h };
+    if -approach > at.restitution_threshold && restitution > 0.0 {
+        target = target.max(-restitution * approach);
+    }
+    let vn = rel.dot(n);
+    let normal_impulse = ((target - vn) / k).max(0.0);
+    let mut impulse = n * normal_impulse;
+    if friction > 0.0 {
+        let after = rel + n * (normal_impulse * k);
+        let vt = after - n * after.dot(n);
+        let slip = vt.length();
+        if slip > 0.0 {
+            impulse -= vt * ((slip / k).min(friction * normal_impulse) / slip);
+        }
+    }
+    impulse
+}
+
+/// Solves a contact [`find`] found between `node` of `body` and one of the body's own facets
+/// (self contact): as [`resolve`], both sides in the one body, with its own coefficients.
+pub(crate) fn resolve_self(
+    body: &mut Deformable,
+    node: u32,
+    hit: &SoftHit,
+    at: &Substep<'_>,
+) -> bool {
+    let i = node as usize;
+    let n = hit.normal;
+    let inv_of = |j: u32| {
+        if body.is_attached(j) {
+            0.0
+        } else {
+            body.rest.inv_masses[j as usize]
+        }
+    };
+    let w_node = inv_of(node);
+    let w_facet: [Real; FACET_ARITY] = std::array::from_fn(|a| inv_of(hit.facet[a]));
+    let k = w_node
+        + (0..FACET_ARITY)
+            .map(|a| hit.weights[a] * hit.weights[a] * w_facet[a])
+            .sum::<Real>();
+    if k <= 0.0 {
+        return false;
+    }
+    let d0 = step_out(&mut body.state.positions[i], hit);
+    let relative = |vel: &[Vector]| -> Vector {
+        vel[i]
+            - (0..FACET_ARITY)
+                .map(|a| vel[hit.facet[a] as usize] * hit.weights[a])
+                .sum::<Vector>()
+    };
+    let approach = relative(&body.step.scratch_velocities).dot(n);
+    let rel = relative(&body.state.velocities);
+    let c = &body.contact;
+    let impulse = contact_impulse(hit, d0, k, approach, rel, (c.friction, c.restitution), at);
+    if impulse == Vector::ZERO {
+        return false;
+    }
+    let v = &mut body.state.velocities;
+    v[i] += impulse * w_node;
+    for ((&j, &w), &inv) in hit.facet.iter().zip(&hit.weights).zip(&w_facet) {
+        v[j as usize] -= impulse * (w * inv);
     }
     true
 }

@@ -46,6 +46,7 @@ pub(super) fn diagnose(
     r.contacts = sc.touched_nodes.iter().filter(|t| **t).count();
     r.facet_contacts = stats.facet_contacts;
     r.soft_contacts = stats.soft_contacts;
+    r.self_contacts = stats.self_contacts;
     r.max_penetration = max_penetration;
     r.inverted_elements = quality.inverted;
     r.min_volume_ratio = quality.min_ratio;

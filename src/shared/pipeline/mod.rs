@@ -299,6 +299,7 @@ impl DeformablePipeline {
         events: &dyn DeformableEventHandler,
     ) {
         let work = &mut self.work;
+        let pairs_start = Instant::now();
         soft::pairs(
             deformables,
             ctx.dt,
@@ -308,6 +309,7 @@ impl DeformablePipeline {
         touching_pairs(deformables, &mut work.touching_before);
         let handles: Vec<DeformableHandle> = deformables.iter().map(|(h, _)| h).collect();
         let groups = soft::groups(&handles, &work.pairs);
+        self.report.pairs_time = pairs_start.elapsed().as_secs_f64();
         // Every body, once, to be handed to its group.
         let mut slots: Vec<Option<&mut Deformable>> =
             deformables.iter_mut().map(|(_, b)| Some(b)).collect();
@@ -390,7 +392,13 @@ fn step_group<'a>(
             });
         }
     }
-    if members.len() > 1 {
+    // Contacts between deformables: the members' against each other's surfaces, and a body
+    // with self contact against its own.
+    let soft = members.len() > 1
+        || members
+            .iter()
+            .any(|m| m.live && m.body.contact.self_contact);
+    if soft {
         for m in members.iter_mut() {
             let still = !m.live;
             m.sc.soft_surface.build(m.body, ctx.gravity, ctx.dt, still);
@@ -402,7 +410,7 @@ fn step_group<'a>(
         }
     }
     // 3. substeps
-    substep::run(&SymplecticEuler, members, ctx, bodies);
+    substep::run(&SymplecticEuler, members, soft, ctx, bodies);
     record_touching(members);
     for (m, detached) in members.iter_mut().zip(detached) {
         finish_member(m, ctx, bodies, events, detached, report);
@@ -442,7 +450,8 @@ fn touching_pairs(set: &DeformableSet, out: &mut Vec<(DeformableHandle, Deformab
     out.dedup();
 }
 
-/// The soft-contact tables of member `i` against the other members' surfaces.
+/// The soft-contact tables of member `i` against the other members' surfaces (and its own,
+/// with self contact).
 fn soft_tables(members: &mut [Member<'_, '_>], i: usize, ctx: &StepContext<'_>) {
     let mut start = std::mem::take(&mut members[i].sc.soft_start);
     let mut cands = std::mem::take(&mut members[i].sc.soft_cands);
@@ -452,8 +461,13 @@ fn soft_tables(members: &mut [Member<'_, '_>], i: usize, ctx: &StepContext<'_>) 
         .enumerate()
         .filter(move |(j, _)| *j != i)
         .map(|(j, o)| (j, &o.sc.soft_surface));
+    let own = m
+        .body
+        .contact
+        .self_contact
+        .then_some((i, &m.sc.soft_surface));
     let widen = m.sc.soft_surface.margin() + ctx.margin;
-    soft::node_tables(m.body, others, ctx.dt, widen, &mut start, &mut cands);
+    soft::node_tables(m.body, others, own, ctx.dt, widen, &mut start, &mut cands);
     members[i].sc.soft_start = start;
     members[i].sc.soft_cands = cands;
 }

@@ -27,6 +27,8 @@ pub(super) struct SubstepStats {
     pub facet_contacts: usize,
     /// Contacts of its nodes with other deformables' facets.
     pub soft_contacts: usize,
+    /// Contacts of its nodes with its own facets.
+    pub self_contacts: usize,
 }
 
 /// The substep size at the current state's bound, or `None` when the body is out of substeps
@@ -79,10 +81,12 @@ pub(super) struct Member<'m, 'a> {
     pub touched: Vec<usize>,
 }
 
-/// Runs the substeps of a group's step, the velocities advanced by `integrator`.
+/// Runs the substeps of a group's step, the velocities advanced by `integrator`; with `soft`,
+/// the members meet each other's surfaces (and their own, with self contact) every substep.
 pub(super) fn run(
     integrator: &impl Integrate,
     members: &mut [Member<'_, '_>],
+    soft: bool,
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
 ) {
@@ -101,7 +105,7 @@ pub(super) fn run(
             let at = substep_at(ctx, m.sc.skin, h, t, &motions[i]);
             advance(integrator, m, ctx, &at, bodies);
         }
-        if live.len() > 1 {
+        if soft {
             let at = substep_at(ctx, 0.0, h, t, &[]);
             soft_contacts(members, &live, &at, substeps % 2 == 1);
         }
@@ -337,8 +341,9 @@ fn facet_contacts(
 }
 
 /// Every free surface node of each live member against the surface facets of the other
-/// members (see [`soft`](super::super::contact::soft)).
+/// members, and its own with self contact (see [`soft`](super::super::contact::soft)).
 fn soft_contacts(members: &mut [Member<'_, '_>], live: &[usize], at: &Substep<'_>, backward: bool) {
+    let mut hits = Vec::new();
     for &i in live {
         let surface = members[i].body.rest.mesh.boundary_nodes().len();
         for j in 0..surface {
@@ -351,14 +356,21 @@ fn soft_contacts(members: &mut [Member<'_, '_>], live: &[usize], at: &Substep<'_
             let node = m.body.rest.mesh.boundary_nodes()[k];
             let cands = &m.sc.soft_cands[b0..b1];
             let body_of = |j: usize| (&*members[j].body, &members[j].sc.soft_surface);
-            let Some(hit) = soft::find(body_of, i, node, cands, at) else {
-                continue;
-            };
-            let (a, b) = pair_mut(members, i, hit.other);
-            if soft::resolve(a.body, node, b.body, !b.live, &hit, at) {
-                a.stats.soft_contacts += 1;
-                if !a.touched.contains(&hit.other) {
-                    a.touched.push(hit.other);
+            soft::find(body_of, i, node, cands, at, &mut hits);
+            for hit in &hits {
+                if hit.other == i {
+                    let m = &mut members[i];
+                    if soft::resolve_self(m.body, node, hit, at) {
+                        m.stats.self_contacts += 1;
+                    }
+                    continue;
+                }
+                let (a, b) = pair_mut(members, i, hit.other);
+                if soft::resolve(a.body, node, b.body, !b.live, hit, at) {
+                    a.stats.soft_contacts += 1;
+                    if !a.touched.contains(&hit.other) {
+                        a.touched.push(hit.other);
+                    }
                 }
             }
         }

@@ -9,6 +9,7 @@ use super::super::lib::BuildError;
 use super::super::lib::DeformableWorld;
 use super::super::lib::Material;
 use super::fall::cuboid;
+use super::metrics::self_interpenetration;
 use super::sim::{BodySpec, Sim};
 use super::subject::Subject;
 use super::Record;
@@ -21,7 +22,9 @@ use super::Record;
 /// from `±0.15` to `±0.95` along x with a half thickness of `0.1`, so the hinge region is free
 /// tissue and every cell that inverts does so because of its model, not because its nodes are
 /// all carried by bones. The bones' colliders are sensors: the tissue is held by its pins only.
-/// `first_failure` is the bone angle (degrees) at the first inverted cell.
+/// `first_failure` is the bone angle (degrees) at the first inverted cell;
+/// `max_self_penetration` how deep the crease's surface went into itself
+/// ([`self_interpenetration`](super::metrics::self_interpenetration), up to half a cell).
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct LimbScene {
     /// What is simulated.
@@ -46,6 +49,9 @@ pub struct LimbScene {
     pub fixed_substeps: Option<usize>,
     /// Stop at the first inverted element.
     pub stop_at_first_inversion: bool,
+    /// Whether sinew's tissue has self contact on (the crease above the hinge folds onto
+    /// itself).
+    pub self_contact: bool,
 }
 
 impl Default for LimbScene {
@@ -64,6 +70,7 @@ impl Default for LimbScene {
             dt: 0.01,
             fixed_substeps: None,
             stop_at_first_inversion: false,
+            self_contact: false,
         }
     }
 }
@@ -123,6 +130,7 @@ impl LimbScene {
             },
         );
         spec.pins = pins;
+        spec.self_contact = self.self_contact;
         let sim = Sim::new(world, self.subject, spec, 2.0, self.fixed_substeps)?;
         Ok((sim, lower))
     }
@@ -137,6 +145,7 @@ impl LimbScene {
         let steps = (self.max_degrees / self.degrees_per_second / self.dt).round() as usize;
         let mut first = None;
         let mut anchor_error: Real = 0.0;
+        let mut self_penetration: Real = 0.0;
         for k in 0..steps {
             let degrees = self.degrees_per_second * self.dt * (k + 1) as Real;
             let rotation = math::rotation_from_angle(math::planar_angle(degrees.to_radians()));
@@ -154,6 +163,11 @@ impl LimbScene {
                     anchor_error = anchor_error.max(err);
                 }
             }
+            self_penetration = self_penetration.max(self_interpenetration(
+                sim.mesh(),
+                sim.positions(),
+                0.5 * self.spacing,
+            ));
             observe(&sim.world, (k + 1) as f64 / steps as f64);
             if sim.inverted_elements() > 0 && first.is_none() {
                 first = Some(degrees);
@@ -173,6 +187,7 @@ impl LimbScene {
         r.failed = r.failure.is_some();
         r.first_failure = first.map(|d| d as f64);
         r.max_anchor_error = Some(anchor_error as f64);
+        r.max_self_penetration = Some(self_penetration as f64);
         Ok(r)
     }
 

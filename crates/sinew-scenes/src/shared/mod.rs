@@ -16,10 +16,14 @@
 //! | [`dt_sweep`] | the fall explodes, leaves an element inverted or sinks | the smallest such dt, ms |
 //! | [`RotationErrorScene`] | (accuracy) spurious angular acceleration of the rotation fit | — |
 //! | [`CantileverScene`] | (accuracy) static sag against Euler–Bernoulli; fails only if it does not settle | — |
+//! | [`StackScene`], [`PileScene`], [`SqueezeScene`] | a cell inverts, or bodies rest inside each other by over 1 % of their size | — |
+//! | [`FoldScene`] | the surface passes into itself (over 1 % of a cell) or a cell inverts | — |
 
 mod cantilever;
 mod crush;
 mod fall;
+mod flock;
+mod fold;
 mod limb;
 mod manipulator;
 pub mod metrics;
@@ -33,6 +37,8 @@ pub use crate::record::{Record, Spread};
 pub use cantilever::{CantileverScene, SETTLED_WOBBLE};
 pub use crush::{CrushScene, CRUSH_MASSES};
 pub use fall::{dt_sweep, FallScene, DT_SWEEP_MS};
+pub use flock::{PileScene, SqueezeScene, StackScene};
+pub use fold::FoldScene;
 pub use limb::LimbScene;
 pub use manipulator::ManipulatorScene;
 pub use rotation_error::{spurious_acceleration, RotationErrorScene};

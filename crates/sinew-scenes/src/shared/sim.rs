@@ -51,6 +51,8 @@ pub(crate) struct BodySpec {
     pub restitution: Real,
     /// Nodes bound to rigid bodies at their initial positions.
     pub pins: Vec<(RigidBodyHandle, Vec<u32>)>,
+    /// sinew only: whether the surface meets itself.
+    pub self_contact: bool,
 }
 
 impl BodySpec {
@@ -64,6 +66,7 @@ impl BodySpec {
             friction: 0.5,
             restitution: 0.5,
             pins: Vec::new(),
+            self_contact: false,
         }
     }
 }
@@ -99,6 +102,100 @@ pub struct Sim {
     exploded: bool,
 }
 
+/// Each node's lumped mass: each cell's mass shared equally by its vertices (as sinew does).
+pub(crate) fn lumped_masses(mesh: &Mesh, material: &Material) -> Vec<Real> {
+    let arity = mesh.kind().arity() as Real;
+    let mut masses = vec![0.0; mesh.nodes().len()];
+    for (cell, ids) in mesh.cells().enumerate() {
+        let m = material.density * mesh.rest_volumes()[cell] / arity;
+        for &i in ids {
+            masses[i as usize] += m;
+        }
+    }
+    masses
+}
+
+/// Where the nodes of `spec`'s body start: the mesh turned, then moved.
+pub(crate) fn rest_positions(spec: &BodySpec) -> Vec<Vector> {
+    spec.mesh
+        .nodes()
+        .iter()
+        .map(|p| spec.rotation * *p + spec.translation)
+        .collect()
+}
+
+/// Puts the body of `spec` in `world` as `subject` (`rest`: its initial node positions,
+/// `masses`: its lumped masses, `pins`: rapier's pinned particles).
+pub(crate) fn insert_soft(
+    world: &mut DeformableWorld,
+    subject: Subject,
+    spec: &BodySpec,
+    rest: &[Vector],
+    masses: &[Real],
+    pins: &[u32],
+    fixed_substeps: Option<usize>,
+) -> Result<Soft, BuildError> {
+    let mesh = &spec.mesh;
+    Ok(match subject {
+        Subject::Sinew(model) => {
+            world.pipeline.settings.fixed_substeps = fixed_substeps;
+            let body = DeformableBuilder::new(mesh.clone())
+                .model(model)
+                .material(spec.material)
+                .stiffness(spec.stiffness)
+                .friction(spec.friction)
+                .restitution(spec.restitution)
+                .translation(spec.translation)
+                .rotation(spec.rotation)
+                .self_contact(spec.self_contact)
+                .build()?;
+            let h = world.insert(body);
+            for (body, nodes) in &spec.pins {
+                world
+                    .attach_nodes(h, *body, nodes)
+                    .map_err(|e| attach_error(&e))?;
+            }
+            Soft::Sinew(h)
+        }
+        Subject::Rapier(model) => {
+            if mesh.kind() != CellKind::Simplex {
+                return Err(cell_kind_error(mesh.kind()));
+            }
+            if let Some(k) = fixed_substeps {
+                let params = &mut world.physics.integration_parameters;
+                params.num_solver_iterations = k.max(1);
+                // rapier adds up to this many substeps on its own under fast motion.
+                params.soft_bodies.max_extra_substeps = 0;
+            }
+            let cells: Vec<[u32; SIMPLEX_ARITY]> = mesh
+                .cells()
+                .map(|c| std::array::from_fn(|i| c[i]))
+                .collect();
+            let edges: Vec<[u32; 2]> = mesh.vertex_pairs().iter().map(|(e, _)| *e).collect();
+            let pinned: Vec<u32> = pins.to_vec();
+            #[allow(unused_mut)]
+            let mut builder = SoftBodyBuilder::new(rest.to_vec())
+                .cells(cells)
+                .masses(masses.to_vec())
+                .material(model.material(&spec.material, mean_edge(rest, &edges)))
+                .cell_model(model.cell_model())
+                .surface_collider(
+                    ColliderBuilder::ball(0.0)
+                        .friction(spec.friction)
+                        .restitution(spec.restitution),
+                )
+                .particle_radius(RAPIER_SKIN)
+                .pinned_particles(pinned)
+                .can_sleep(false);
+            #[cfg(feature = "fem")]
+            {
+                builder = builder.solver(model.solver());
+            }
+            Soft::Rapier(world.physics.insert_soft_body(builder))
+        }
+    })
+}
+
 fn cell_kind_error(kind: CellKind) -> BuildError {
     BuildError::UnsupportedCells {
         model: "rapier soft body",
@@ -116,17 +213,9 @@ impl Sim {
         size: Real,
         fixed_substeps: Option<usize>,
     ) -> Result<Sim, BuildError> {
-        let mesh = spec.mesh;
-        let n = mesh.nodes().len();
-        let arity = mesh.kind().arity() as Real;
-        let mut masses = vec![0.0; n];
-        for (cell, ids) in mesh.cells().enumerate() {
-            let m = spec.material.density * mesh.rest_volumes()[cell] / arity;
-            for &i in ids {
-                masses[i as usize] += m;
-            }
-        }
-        let rest: Vec<Vector> = mesh.nodes().iter().map(|p| *p + spec.translation).collect();
+        let n = spec.mesh.nodes().len();
+        let masses = lumped_masses(&spec.mesh, &spec.material);
+        let rest = rest_positions(&spec);
         let mut pins = Vec::new();
         for (body, nodes) in &spec.pins {
             let pose = *world
@@ -147,63 +236,17 @@ impl Sim {
                 });
             }
         }
-        let soft = match subject {
-            Subject::Sinew(model) => {
-                world.pipeline.settings.fixed_substeps = fixed_substeps;
-                let body = DeformableBuilder::new(mesh.clone())
-                    .model(model)
-                    .material(spec.material)
-                    .stiffness(spec.stiffness)
-                    .friction(spec.friction)
-                    .restitution(spec.restitution)
-                    .translation(spec.translation)
-                    .rotation(spec.rotation)
-                    .build()?;
-                let h = world.insert(body);
-                for (body, nodes) in &spec.pins {
-                    world
-                        .attach_nodes(h, *body, nodes)
-                        .map_err(|e| attach_error(&e))?;
-                }
-                Soft::Sinew(h)
-            }
-            Subject::Rapier(model) => {
-                if mesh.kind() != CellKind::Simplex {
-                    return Err(cell_kind_error(mesh.kind()));
-                }
-                if let Some(k) = fixed_substeps {
-                    let params = &mut world.physics.integration_parameters;
-                    params.num_solver_iterations = k.max(1);
-                    // rapier adds up to this many substeps on its own under fast motion.
-                    params.soft_bodies.max_extra_substeps = 0;
-                }
-                let cells: Vec<[u32; SIMPLEX_ARITY]> = mesh
-                    .cells()
-                    .map(|c| std::array::from_fn(|i| c[i]))
-                    .collect();
-                let edges: Vec<[u32; 2]> = mesh.vertex_pairs().iter().map(|(e, _)| *e).collect();
-                let pinned: Vec<u32> = pins.iter().map(|p| p.node).collect();
-                #[allow(unused_mut)]
-                let mut builder = SoftBodyBuilder::new(rest.clone())
-                    .cells(cells)
-                    .masses(masses.clone())
-                    .material(model.material(&spec.material, mean_edge(&rest, &edges)))
-                    .cell_model(model.cell_model())
-                    .surface_collider(
-                        ColliderBuilder::ball(0.0)
-                            .friction(spec.friction)
-                            .restitution(spec.restitution),
-                    )
-                    .particle_radius(RAPIER_SKIN)
-                    .pinned_particles(pinned)
-                    .can_sleep(false);
-                #[cfg(feature = "fem")]
-                {
-                    builder = builder.solver(model.solver());
-                }
-                Soft::Rapier(world.physics.insert_soft_body(builder))
-            }
-        };
+        let pinned: Vec<u32> = pins.iter().map(|p| p.node).collect();
+        let soft = insert_soft(
+            &mut world,
+            subject,
+            &spec,
+            &rest,
+            &masses,
+            &pinned,
+            fixed_substeps,
+        )?;
+        let mesh = spec.mesh;
         let mut sim = Sim {
             world,
             subject,
