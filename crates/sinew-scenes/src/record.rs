@@ -105,8 +105,9 @@ pub struct Record {
     pub max_interpenetration: Option<f64>,
     /// The same over the run's last second, m.
     pub rest_interpenetration: Option<f64>,
-    /// Largest rise of the kinetic plus gravitational energy over its start, relative (stack,
-    /// pile, squeeze; the box's energy not counted).
+    /// Largest rise of the total energy (kinetic, gravitational, and for sinew elastic) above
+    /// its lowest value so far, over the energy at the start (stack, pile, squeeze; the box's
+    /// energy not counted): energy the contacts created.
     pub energy_gain: Option<f64>,
     /// Fastest node at the end, m/s.
     pub final_speed: Option<f64>,

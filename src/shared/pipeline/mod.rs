@@ -403,8 +403,9 @@ fn step_group<'a>(
             let still = !m.live;
             m.sc.soft_surface.build(m.body, ctx.gravity, ctx.dt, still);
         }
+        // A still member's nodes too: a live member's facets must not creep into them.
         for i in 0..members.len() {
-            if members[i].live {
+            if !members[i].body.activation.frozen {
                 soft_tables(members, i, ctx);
             }
         }

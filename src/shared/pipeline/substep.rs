@@ -107,7 +107,7 @@ pub(super) fn run(
         }
         if soft {
             let at = substep_at(ctx, 0.0, h, t, &[]);
-            soft_contacts(members, &live, &at, substeps % 2 == 1);
+            soft_contacts(members, &at, substeps % 2 == 1);
         }
         for &i in &live {
             let m = &mut members[i];
@@ -340,11 +340,15 @@ fn facet_contacts(
     solved
 }
 
-/// Every free surface node of each live member against the surface facets of the other
-/// members, and its own with self contact (see [`soft`](super::super::contact::soft)).
-fn soft_contacts(members: &mut [Member<'_, '_>], live: &[usize], at: &Substep<'_>, backward: bool) {
+/// Every free surface node of each member against the surface facets of the other members
+/// (one side at least live), and its own with self contact (see
+/// [`soft`](super::super::contact::soft)).
+fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: bool) {
     let mut hits = Vec::new();
-    for &i in live {
+    for i in 0..members.len() {
+        if members[i].body.activation.frozen {
+            continue;
+        }
         let surface = members[i].body.rest.mesh.boundary_nodes().len();
         for j in 0..surface {
             let k = order(backward, surface, j);
@@ -357,24 +361,44 @@ fn soft_contacts(members: &mut [Member<'_, '_>], live: &[usize], at: &Substep<'_
             let cands = &m.sc.soft_cands[b0..b1];
             let body_of = |j: usize| (&*members[j].body, &members[j].sc.soft_surface);
             soft::find(body_of, i, node, cands, at, &mut hits);
-            for hit in &hits {
-                if hit.other == i {
+            // A still member's nodes meet only live members' facets.
+            let still = !members[i].live;
+            hits.retain(|h| !still || (h.other != i && members[h.other].live));
+            for hit in hits.drain(..) {
+                if solve_soft(members, i, node, &hit, at) {
+                    let other = hit.other;
                     let m = &mut members[i];
-                    if soft::resolve_self(m.body, node, hit, at) {
+                    if other == i {
                         m.stats.self_contacts += 1;
-                    }
-                    continue;
-                }
-                let (a, b) = pair_mut(members, i, hit.other);
-                if soft::resolve(a.body, node, b.body, !b.live, hit, at) {
-                    a.stats.soft_contacts += 1;
-                    if !a.touched.contains(&hit.other) {
-                        a.touched.push(hit.other);
+                    } else {
+                        m.stats.soft_contacts += 1;
+                        if !m.touched.contains(&other) {
+                            m.touched.push(other);
+                        }
                     }
                 }
             }
         }
     }
+}
+
+/// Solves one contact `find` found for `node` of member `i`; whether an impulse was applied.
+fn solve_soft(
+    members: &mut [Member<'_, '_>],
+    i: usize,
+    node: u32,
+    hit: &soft::SoftHit,
+    at: &Substep<'_>,
+) -> bool {
+    if hit.other == i {
+        return soft::resolve_self(members[i].body, node, hit, at);
+    }
+    let (a, b) = pair_mut(members, i, hit.other);
+    let still = soft::Still {
+        node: !a.live,
+        facet: !b.live,
+    };
+    soft::resolve(a.body, node, b.body, still, hit, at)
 }
 
 /// Two distinct elements of a slice, mutably.

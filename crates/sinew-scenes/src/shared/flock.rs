@@ -262,7 +262,9 @@ struct Watch {
     deepest: Real,
     deepest_at_rest: Real,
     energy_start: Real,
-    energy_max: Real,
+    /// The lowest total energy so far, and the largest rise above it.
+    energy_low: Real,
+    energy_rise: Real,
 }
 
 impl Watch {
@@ -270,13 +272,15 @@ impl Watch {
         let e = flock.energy();
         Watch {
             energy_start: e,
-            energy_max: e,
+            energy_low: e,
             ..Default::default()
         }
     }
 
     fn observe(&mut self, flock: &Flock, last_second: bool, every: bool) {
-        self.energy_max = self.energy_max.max(flock.energy());
+        let e = flock.energy();
+        self.energy_low = self.energy_low.min(e);
+        self.energy_rise = self.energy_rise.max(e - self.energy_low);
         if every || last_second {
             let d = flock.interpenetration();
             self.deepest = self.deepest.max(d);
@@ -289,9 +293,7 @@ impl Watch {
     fn fill(&self, r: &mut Record, flock: &Flock, size: Real) {
         r.max_interpenetration = Some(self.deepest as f64);
         r.rest_interpenetration = Some(self.deepest_at_rest as f64);
-        r.energy_gain = Some(
-            ((self.energy_max - self.energy_start) / self.energy_start.abs().max(1e-9)) as f64,
-        );
+        r.energy_gain = Some((self.energy_rise / self.energy_start.abs().max(1e-9)) as f64);
         r.final_speed = Some(flock.fastest() as f64);
         r.failure = crate::record::failure(&[
             (r.nan, "non-finite state"),

@@ -186,8 +186,10 @@ pub fn interpenetration(a: (&Mesh, &[Vector]), b: (&Mesh, &[Vector])) -> Real {
     let Some(solid) = Solid::new(b.0, b.1, Real::INFINITY) else {
         return Real::NAN;
     };
-    a.0.boundary_nodes()
-        .iter()
-        .filter_map(|&i| solid.depth(a.1[i as usize], None))
-        .fold(0.0, Real::max)
+    let d =
+        a.0.boundary_nodes()
+            .iter()
+            .filter_map(|&i| solid.depth(a.1[i as usize], None))
+            .fold(0.0, Real::max);
+    d
 }
