@@ -111,7 +111,8 @@ pub struct Record {
     pub energy_gain: Option<f64>,
     /// Fastest node at the end, m/s.
     pub final_speed: Option<f64>,
-    /// Wall time spent finding the pairs of deformables that may touch, s (sinew only).
+    /// Wall time spent finding the pairs of deformables that may touch, s (sinew only: rapier's
+    /// is inside its step).
     pub pairs_wall_s: Option<f64>,
     /// Largest distance of a pinned node from its anchor on its bone, m (limb).
     pub max_anchor_error: Option<f64>,

@@ -153,27 +153,37 @@ impl Flock {
         deepest
     }
 
-    /// Kinetic plus gravitational energy of all bodies (height from 0), plus the elastic
-    /// energy of sinew's (rapier's soft bodies do not say theirs), J.
+    /// Kinetic plus gravitational energy of all soft bodies (height from 0), plus the elastic
+    /// energy of sinew's (rapier's soft bodies do not say theirs), plus the kinetic and
+    /// gravitational energy of the dynamic rigid bodies, J.
     pub fn energy(&self) -> Real {
-        let g = -self.world.physics.gravity.dot(UP);
-        let report = self.world.report();
-        self.members
+        let physics = &self.world.physics;
+        let g = -physics.gravity.dot(UP);
+        let rigid: Real = physics
+            .bodies
             .iter()
-            .map(|m| {
-                let elastic = match m.soft {
-                    Soft::Sinew(h) => report.get(h).map_or(0.0, |r| r.elastic_energy),
-                    Soft::Rapier(_) => 0.0,
-                };
-                elastic
-                    + m.x
-                        .iter()
-                        .zip(&m.v)
-                        .zip(&m.masses)
-                        .map(|((x, v), mass)| mass * (0.5 * v.length_squared() + g * x.dot(UP)))
-                        .sum::<Real>()
-            })
-            .sum()
+            .filter(|(_, b)| b.is_dynamic())
+            .map(|(_, b)| b.kinetic_energy() + b.mass() * g * b.center_of_mass().dot(UP))
+            .sum();
+        let report = self.world.report();
+        rigid
+            + self
+                .members
+                .iter()
+                .map(|m| {
+                    let elastic = match m.soft {
+                        Soft::Sinew(h) => report.get(h).map_or(0.0, |r| r.elastic_energy),
+                        Soft::Rapier(_) => 0.0,
+                    };
+                    elastic
+                        + m.x
+                            .iter()
+                            .zip(&m.v)
+                            .zip(&m.masses)
+                            .map(|((x, v), mass)| mass * (0.5 * v.length_squared() + g * x.dot(UP)))
+                            .sum::<Real>()
+                })
+                .sum::<Real>()
     }
 
     /// The fastest node of any body, m/s.
@@ -243,7 +253,7 @@ impl Flock {
             max_substeps: self.max_substeps,
             sim_s: self.world.time() as f64,
             wall_s: self.wall,
-            pairs_wall_s: Some(self.pairs_wall),
+            pairs_wall_s: matches!(self.subject, Subject::Sinew(_)).then_some(self.pairs_wall),
             min_vol_ratio: min_ratio as f64,
             final_inverted_elements: inverted,
             max_inverted_elements: inverted,
