@@ -14,6 +14,8 @@ const KEYS: &[(&str, &str)] = &[
     ("dim", "u"),
     ("model", "s"),
     ("iterations", "s?"),
+    ("integrator", "s?"),
+    ("sweeps", "u?"),
     ("res", "u"),
     ("nodes", "u"),
     ("elements", "u"),
@@ -253,6 +255,32 @@ fn rotation_error_reports_the_spread() {
         assert!(l["spurious_mean"].as_f64().unwrap() >= 0.0);
         assert!(l["spurious_max"].as_f64().unwrap() >= l["spurious_mean"].as_f64().unwrap());
     }
+}
+
+#[test]
+fn the_implicit_integrator_is_chosen_from_the_command_line() {
+    let lines = run(&[
+        "fall",
+        "--dim",
+        "3",
+        "--res",
+        "3",
+        "--seconds",
+        "0.1",
+        "--dt",
+        "0.0166667",
+        "--model",
+        "edge-repulsion",
+        "rapier-volume",
+        "--integrator",
+        "implicit",
+        "--sweeps",
+        "4",
+    ]);
+    assert_eq!(lines[0]["integrator"], "implicit");
+    assert_eq!(lines[0]["sweeps"], 4);
+    assert!(lines[0]["substeps"].as_f64().unwrap() <= 1.0);
+    assert!(lines[1]["integrator"].is_null() && lines[1]["sweeps"].is_null());
 }
 
 #[test]

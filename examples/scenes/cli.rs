@@ -39,6 +39,15 @@ pub enum Scene {
     Fold,
 }
 
+/// sinew's integrators.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorArg {
+    /// Symplectic Euler under the stability bound (default).
+    Explicit,
+    /// Backward Euler by Vertex Block Descent (`--sweeps`).
+    Implicit,
+}
+
 /// On or off.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Switch {
@@ -88,6 +97,13 @@ pub struct Args {
     /// Strikes of the manipulator (default 20).
     #[arg(long)]
     pub strikes: Option<usize>,
+    /// sinew's integrator (fall, dt-sweep, crush, manipulator: the cube scenes).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
+    /// Gauss–Seidel sweeps per step of the implicit integrator (default 10). (`--iterations`
+    /// is the shape-based element's rotation fit.)
+    #[arg(long)]
+    pub sweeps: Option<usize>,
     /// Bodies of the pile, one run per count (default: 10).
     #[arg(long, num_args = 1..)]
     pub bodies: Vec<usize>,
@@ -234,8 +250,11 @@ pub fn to_json(r: &Record) -> Value {
         "nan": r.nan,
         "exploded": r.exploded,
     });
-    // The contact scenes' keys (one `json!` of every key passes the macro's recursion limit).
+    // The integrator's and the contact scenes' keys (one `json!` of every key passes the
+    // macro's recursion limit).
     let contact = json!({
+        "integrator": r.integrator,
+        "sweeps": r.sweeps,
         "bodies": r.bodies,
         "max_interpenetration": r.max_interpenetration,
         "rest_interpenetration": r.rest_interpenetration,
@@ -372,8 +391,9 @@ fn table_row(scene: Scene, r: &Record) -> String {
 macro_rules! dimension_runner {
     ($module:ident, $dim:ident) => {
         mod $module {
-            use super::{Args, Progress, Scene, Switch};
+            use super::{Args, IntegratorArg, Progress, Scene, Switch};
             use sinew::$dim::math::Real;
+            use sinew::$dim::Integrator;
             use sinew::$dim::{DeformableWorld, ElementModel, RotationFit};
             use sinew_scenes::record::Record;
             use sinew_scenes::$dim::{
@@ -440,6 +460,12 @@ macro_rules! dimension_runner {
                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                     young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                     poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                    integrator: match args.integrator {
+                        Some(IntegratorArg::Implicit) => Integrator::Implicit {
+                            iterations: args.sweeps.unwrap_or(10),
+                        },
+                        _ => Integrator::Explicit,
+                    },
                     ..d
                 }
             }

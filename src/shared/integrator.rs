@@ -10,7 +10,7 @@
 
 use super::body::Deformable;
 use super::math::{Real, Vector};
-use super::model;
+use super::model::{self, StepInput};
 
 /// How long the next substep may be at the body's current state.
 #[derive(Copy, Clone, Debug)]
@@ -30,6 +30,25 @@ pub(crate) trait Integrate {
     /// Advances every node's velocity over `h` under the element forces and gravity `g`
     /// (bones and contacts come after, in the loop).
     fn advance_velocities(&self, body: &mut Deformable, g: Vector, h: Real);
+
+    /// After the bones and the contacts set some nodes' velocities (`before`: the velocities
+    /// they found), lets the others answer them within the substep; returns whether it did
+    /// (then the loop solves the contacts once more). Explicit integrators leave it to the
+    /// next substep.
+    fn after_contacts(
+        &self,
+        _body: &mut Deformable,
+        _g: Vector,
+        _h: Real,
+        _before: &[Vector],
+    ) -> bool {
+        false
+    }
+
+    /// Whether [`Integrate::after_contacts`] does anything for `body`.
+    fn answers_contacts(&self, _body: &Deformable) -> bool {
+        false
+    }
 }
 
 /// Symplectic (semi-implicit) Euler: `v += (f/m + g) h`, then `x += v h` in the loop. Stable
@@ -51,6 +70,116 @@ impl Integrate for SymplecticEuler {
         let inv_masses = &body.rest.inv_masses;
         for ((v, f), w) in body.state.velocities.iter_mut().zip(force).zip(inv_masses) {
             *v += (*f * *w + g) * h;
+        }
+    }
+}
+
+/// Which integrator steps the deformables ([`PipelineSettings::integrator`](super::PipelineSettings::integrator)).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Default)]
+pub enum Integrator {
+    /// Symplectic Euler in substeps under the stability bound, the papers' integrator (the
+    /// default).
+    #[default]
+    Explicit,
+    /// Backward Euler by Vertex Block Descent: one substep per step, `iterations` Gauss–Seidel
+    /// sweeps of per-node Newton steps (the cost knob; `docs/ARCHITECTURE.md` §4.2). Springs,
+    /// nonlinear springs and edge repulsion so far; the other models step explicitly.
+    Implicit {
+        /// Sweeps per step.
+        iterations: usize,
+    },
+}
+
+impl Integrator {
+    /// Whether `body` takes the implicit step.
+    fn implicit_for(&self, body: &Deformable) -> Option<usize> {
+        match *self {
+            Integrator::Implicit { iterations } if body.state.elements.has_implicit() => {
+                Some(iterations.max(1))
+            }
+            _ => None,
+        }
+    }
+}
+
+impl Integrate for Integrator {
+    fn bound(&self, body: &Deformable) -> Bound {
+        match self.implicit_for(body) {
+            // Unconditionally stable, and the line search keeps cells upright.
+            Some(_) => Bound {
+                stable: Real::INFINITY,
+                limiter: Real::INFINITY,
+            },
+            None => SymplecticEuler.bound(body),
+        }
+    }
+
+    fn advance_velocities(&self, body: &mut Deformable, g: Vector, h: Real) {
+        let Some(iterations) = self.implicit_for(body) else {
+            return SymplecticEuler.advance_velocities(body, g, h);
+        };
+        // Bound nodes keep the velocity the last bone drive gave them; the drive follows.
+        let (x0, v) = (&body.state.positions, &body.state.velocities);
+        let held: Vec<Option<Vector>> = (0..x0.len())
+            .map(|i| body.is_attached(i as u32).then(|| x0[i] + v[i] * h))
+            .collect();
+        implicit_pass(body, g, h, iterations, &held, false);
+    }
+
+    fn answers_contacts(&self, body: &Deformable) -> bool {
+        self.implicit_for(body).is_some()
+    }
+
+    fn after_contacts(&self, body: &mut Deformable, g: Vector, h: Real, before: &[Vector]) -> bool {
+        let Some(iterations) = self.implicit_for(body) else {
+            return false;
+        };
+        // The nodes the bones and the contacts set (their velocity changed, or bound) are held
+        // where those velocities take them; the others answer them in the same step.
+        let (x0, v) = (&body.state.positions, &body.state.velocities);
+        let held: Vec<Option<Vector>> = (0..x0.len())
+            .map(|i| (body.is_attached(i as u32) || v[i] != before[i]).then(|| x0[i] + v[i] * h))
+            .collect();
+        implicit_pass(body, g, h, iterations, &held, true);
+        true
+    }
+}
+
+/// One implicit solve of `body` over `h` (free nodes from their velocity at the start of the
+/// substep, `step.scratch_velocities`), the result turned into velocities; `warm` starts the
+/// sweeps from where the current velocities lead.
+fn implicit_pass(
+    body: &mut Deformable,
+    g: Vector,
+    h: Real,
+    iterations: usize,
+    held: &[Option<Vector>],
+    warm: bool,
+) {
+    let mut x = Vec::new();
+    let start: Option<Vec<Vector>> = warm.then(|| {
+        let x0 = &body.state.positions;
+        x0.iter()
+            .zip(&body.state.velocities)
+            .map(|(x, v)| *x + *v * h)
+            .collect()
+    });
+    let input = StepInput {
+        x0: &body.state.positions,
+        v0: &body.step.scratch_velocities,
+        masses: &body.rest.masses,
+        held,
+        start: start.as_deref(),
+        gravity: g,
+        h,
+        iterations,
+    };
+    body.state.elements.implicit_step(&input, &mut x);
+    let x0 = &body.state.positions;
+    for (i, v) in body.state.velocities.iter_mut().enumerate() {
+        if held[i].is_none() {
+            *v = (x[i] - x0[i]) / h;
         }
     }
 }

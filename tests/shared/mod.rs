@@ -8,6 +8,7 @@ mod elements;
 mod errors;
 mod fall;
 mod faults;
+mod implicit;
 // The recorded hashes hold for this platform's arithmetic in a default build.
 #[cfg(all(
     target_arch = "x86_64",

@@ -45,6 +45,10 @@ pub struct Record {
     pub model: String,
     /// Rotation fit of the shape-based model (`1`, `2`, `3` iterations or `polar`).
     pub iterations: Option<String>,
+    /// sinew's integrator, `explicit` or `implicit` (`None` for rapier's bodies).
+    pub integrator: Option<String>,
+    /// Sweeps per step of the implicit integrator.
+    pub sweeps: Option<usize>,
     /// Nodes per edge of the lattice (cantilever: nodes across the beam's thickness).
     pub res: usize,
     /// Soft bodies in the scene (the multi-body scenes: stack, pile, squeeze).

@@ -113,11 +113,11 @@ pub fn repulsion(c: Vector, facet: &[Vector], side: Real, h0: Real, k: Real) -> 
 #[derive(Clone, Debug)]
 pub(crate) struct EdgeRepulsion {
     pub edges: Springs,
-    cells: Vec<u32>,
+    pub(super) cells: Vec<u32>,
     /// Per cell vertex: rest height, side sign, repulsion stiffness.
-    h0: Vec<Real>,
-    side: Vec<Real>,
-    k: Vec<Real>,
+    pub(super) h0: Vec<Real>,
+    pub(super) side: Vec<Real>,
+    pub(super) k: Vec<Real>,
 }
 
 /// Local indices of the facet opposite each vertex, in increasing order.
@@ -136,7 +136,7 @@ const fn opposite(a: usize) -> [usize; FACET_ARITY] {
 }
 
 /// [`opposite`] for every vertex.
-const OPPOSITE: [[usize; FACET_ARITY]; SIMPLEX_ARITY] = {
+pub(super) const OPPOSITE: [[usize; FACET_ARITY]; SIMPLEX_ARITY] = {
     let mut t = [[0; FACET_ARITY]; SIMPLEX_ARITY];
     let mut a = 0;
     while a < SIMPLEX_ARITY {

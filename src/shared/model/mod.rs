@@ -51,6 +51,8 @@
 
 pub mod centroid_springs;
 pub mod edge_repulsion;
+pub mod hessian;
+mod implicit;
 pub mod nonlinear_springs;
 #[cfg(feature = "parallel")]
 mod parallel;
@@ -58,6 +60,8 @@ pub mod shape_matching;
 pub mod springs;
 #[cfg(all(test, feature = "parallel"))]
 mod tests;
+
+pub(crate) use implicit::StepInput;
 
 use super::error::BuildError;
 use super::material::Resolved;
@@ -226,6 +230,8 @@ pub(crate) enum Elements {
 pub(crate) struct ModelState {
     elements: Elements,
     bounds: NodeBounds,
+    /// Which terms touch each node, for the implicit step (made when first needed).
+    incidence: std::sync::OnceLock<implicit::Incidence>,
     #[cfg(feature = "parallel")]
     split: Option<parallel::Split>,
 }
@@ -289,6 +295,7 @@ impl ModelState {
             split: parallel::Split::build_if_large(&elements, mesh),
             elements,
             bounds,
+            incidence: std::sync::OnceLock::new(),
         })
     }
 

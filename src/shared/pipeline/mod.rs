@@ -48,7 +48,7 @@ use super::contact::soft::{self, SoftSurface};
 use super::contact::{Candidate, ContactMaterial, ContactPoint, Scan};
 use super::coupling::{self, BodyMotion, RigidBackup};
 use super::events::{DeformableContactEvent, DeformableEventHandler};
-use super::integrator::SymplecticEuler;
+use super::integrator::Integrator;
 use super::math::{Real, Vector};
 use super::rapier::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
 use super::rapier::geometry::{BroadPhaseBvh, ColliderHandle, ColliderSet};
@@ -82,6 +82,9 @@ pub struct PipelineSettings {
     /// A body still this long (s), with no bone it is bound to moving and no moving or awake
     /// dynamic body near it, falls asleep (default 0.5 s, rapier 0.36's `time_until_sleep`).
     pub time_until_sleep: Real,
+    /// How the bodies' velocities advance (default [`Integrator::Explicit`]).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub integrator: Integrator,
 }
 
 impl Default for PipelineSettings {
@@ -94,6 +97,7 @@ impl Default for PipelineSettings {
             max_stretch: 10.0,
             sleep_speed: 0.05,
             time_until_sleep: 0.5,
+            integrator: Integrator::Explicit,
         }
     }
 }
@@ -411,7 +415,7 @@ fn step_group<'a>(
         }
     }
     // 3. substeps
-    substep::run(&SymplecticEuler, members, soft, ctx, bodies);
+    substep::run(&ctx.settings.integrator, members, soft, ctx, bodies);
     record_touching(members);
     for (m, detached) in members.iter_mut().zip(detached) {
         finish_member(m, ctx, bodies, events, detached, report);

@@ -221,6 +221,8 @@ fn advance(
     let candidates = &mut m.candidates;
     if !candidates.is_empty() {
         let stats = &mut m.stats;
+        let answers = integrator.answers_contacts(body);
+        let before = answers.then(|| body.state.velocities.clone());
         timed(&mut m.times.contacts, || {
             for c in candidates.iter_mut() {
                 c.advance(at.s1, at.dt, at.motions, bodies);
@@ -231,6 +233,18 @@ fn advance(
             node_contacts(body, at, backward, bodies, sc, candidates);
             stats.facet_contacts += facet_contacts(body, at, backward, bodies, sc, candidates);
         });
+        // An implicit integrator lets the rest of the body answer the contacts within the
+        // step, then the contacts see the result.
+        if let Some(before) = before {
+            if integrator.after_contacts(body, g, at.h, &before) {
+                timed(&mut m.times.contacts, || {
+                    let backward = stats.substeps % 2 == 1;
+                    node_contacts(body, at, backward, bodies, sc, candidates);
+                    stats.facet_contacts +=
+                        facet_contacts(body, at, backward, bodies, sc, candidates);
+                });
+            }
+        }
     }
 }
 

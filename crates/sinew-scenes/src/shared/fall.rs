@@ -7,6 +7,7 @@ use super::super::lib::rapier::dynamics::RigidBodyBuilder;
 use super::super::lib::rapier::geometry::{ColliderBuilder, Cuboid, SharedShape};
 use super::super::lib::BuildError;
 use super::super::lib::DeformableWorld;
+use super::super::lib::Integrator;
 use super::super::lib::Material;
 use super::sim::{BodySpec, Bounce, Sim};
 use super::subject::Subject;
@@ -48,6 +49,8 @@ pub struct FallScene {
     pub seconds: Real,
     /// A fixed substep count instead of each solver's own choice.
     pub fixed_substeps: Option<usize>,
+    /// sinew's integrator.
+    pub integrator: Integrator,
 }
 
 impl Default for FallScene {
@@ -70,6 +73,7 @@ impl Default for FallScene {
             dt: 1.0e-3,
             seconds: 3.0,
             fixed_substeps: None,
+            integrator: Integrator::Explicit,
         }
     }
 }
@@ -105,6 +109,7 @@ impl FallScene {
     pub(crate) fn ground_world(&self) -> DeformableWorld {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
+        world.pipeline.settings.integrator = self.integrator;
         ground(&mut world, self.friction, self.restitution);
         world
     }

@@ -12,6 +12,7 @@ use super::super::lib::BuildError;
 use super::super::lib::DeformableBuilder;
 use super::super::lib::DeformableHandle;
 use super::super::lib::DeformableWorld;
+use super::super::lib::Integrator;
 use super::super::lib::{Material, Stiffness};
 use super::subject::{mean_edge, Subject};
 use crate::record::{Record, EXPLODED_DISTANCE, EXPLODED_SPEED};
@@ -488,6 +489,15 @@ impl Sim {
         super::metrics::shape_error(&self.x, &self.rest, &self.masses, self.size)
     }
 
+    /// sinew's integrator's name (`None` for rapier's bodies).
+    fn integrator_name(&self) -> Option<&'static str> {
+        match (self.subject, self.world.pipeline.settings.integrator) {
+            (Subject::Rapier(_), _) => None,
+            (_, Integrator::Explicit) => Some("explicit"),
+            (_, Integrator::Implicit { .. }) => Some("implicit"),
+        }
+    }
+
     /// A record with everything common to all scenes filled in.
     pub(crate) fn record(&self, scene: &str, res: usize) -> Record {
         let params = &self.world.physics.integration_parameters;
@@ -496,6 +506,11 @@ impl Sim {
             dim: DIM,
             model: self.subject.name().to_string(),
             iterations: self.subject.iterations(),
+            integrator: self.integrator_name().map(str::to_string),
+            sweeps: match (self.subject, self.world.pipeline.settings.integrator) {
+                (Subject::Sinew(_), Integrator::Implicit { iterations }) => Some(iterations),
+                _ => None,
+            },
             res,
             nodes: self.x.len(),
             elements: self.mesh.num_cells(),
