@@ -346,6 +346,16 @@ pub(crate) struct SoftHit {
     depth_limit: Real,
 }
 
+impl SoftHit {
+    /// The contact's effective inverse mass along its normal, `1/m_i + Σ w_j²/m_j`, from the
+    /// node's and the facet nodes' inverse masses.
+    fn inverse_mass(&self, node: Real, facet: &[Real; FACET_ARITY]) -> Real {
+        node + (0..FACET_ARITY)
+            .map(|a| self.weights[a] * self.weights[a] * facet[a])
+            .sum::<Real>()
+    }
+}
+
 /// The facets of the candidates `cands` that `node` of `body_of(i)` meets in this substep (see
 /// the module docs), into `out`: the one it is most in front of first (the face it comes
 /// through), then the others it would end behind; `body_of(j)` gives member `j`'s body and
@@ -473,10 +483,7 @@ pub(crate) fn resolve(
             inv_of(other, hit.facet[a])
         }
     });
-    let k = w_node
-        + (0..FACET_ARITY)
-            .map(|a| hit.weights[a] * hit.weights[a] * w_facet[a])
-            .sum::<Real>();
+    let k = hit.inverse_mass(w_node, &w_facet);
     if k <= 0.0 {
         return false;
     }
@@ -609,10 +616,7 @@ pub(crate) fn resolve_self(
     };
     let w_node = inv_of(node);
     let w_facet: [Real; FACET_ARITY] = std::array::from_fn(|a| inv_of(hit.facet[a]));
-    let k = w_node
-        + (0..FACET_ARITY)
-            .map(|a| hit.weights[a] * hit.weights[a] * w_facet[a])
-            .sum::<Real>();
+    let k = hit.inverse_mass(w_node, &w_facet);
     if k <= 0.0 {
         return false;
     }

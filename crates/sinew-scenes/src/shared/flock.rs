@@ -287,6 +287,30 @@ impl Watch {
         }
     }
 
+    /// Steps `flock` for `seconds` of `dt`, measuring the interpenetration every `every` steps
+    /// and every step of the last second, calling `each` after every step; stops early on an
+    /// explosion.
+    fn run(
+        flock: &mut Flock,
+        dt: Real,
+        seconds: Real,
+        every: usize,
+        mut each: impl FnMut(&Flock),
+    ) -> Watch {
+        let steps = (seconds / dt).round() as usize;
+        let rest_from = steps.saturating_sub((1.0 / dt).round() as usize);
+        let mut watch = Watch::new(flock);
+        for k in 0..steps {
+            flock.step();
+            watch.observe(flock, k >= rest_from, k % every.max(1) == 0);
+            each(flock);
+            if flock.exploded {
+                break;
+            }
+        }
+        watch
+    }
+
     fn observe(&mut self, flock: &Flock, last_second: bool, every: bool) {
         let e = flock.energy();
         self.energy_low = self.energy_low.min(e);
@@ -327,6 +351,16 @@ fn ground(world: &mut DeformableWorld, half_width: Real) {
     );
 }
 
+/// The scenes' soft material: 400 kg/m³, E = 10⁵ Pa, damping ratio `damping_ratio`.
+fn cube_material(damping_ratio: Real) -> Material {
+    Material {
+        density: 400.0,
+        young_modulus: 1e5,
+        damping_ratio,
+        ..Default::default()
+    }
+}
+
 fn cube_mesh(size: Real, res: usize) -> Result<Mesh, BuildError> {
     Mesh::cuboid(Vector::splat(0.5 * size), [res; DIM], CellKind::Simplex)
 }
@@ -362,12 +396,7 @@ impl Default for StackScene {
             subject: Subject::Sinew(ElementModel::EdgeRepulsion),
             size: 0.5,
             resolution: 4,
-            material: Material {
-                density: 400.0,
-                young_modulus: 1e5,
-                damping_ratio: 0.8,
-                ..Default::default()
-            },
+            material: cube_material(0.8),
             gap: 0.05,
             offset: 0.05,
             dt: 1.0 / 60.0,
@@ -388,16 +417,7 @@ impl StackScene {
         at[0] = self.offset;
         let upper = BodySpec::new(mesh, at, self.material);
         let mut flock = Flock::new(world, self.subject, vec![lower, upper])?;
-        let steps = (self.seconds / self.dt).round() as usize;
-        let rest_from = steps.saturating_sub((1.0 / self.dt).round() as usize);
-        let mut watch = Watch::new(&flock);
-        for k in 0..steps {
-            flock.step();
-            watch.observe(&flock, k >= rest_from, true);
-            if flock.exploded {
-                break;
-            }
-        }
+        let watch = Watch::run(&mut flock, self.dt, self.seconds, 1, |_| {});
         let mut r = flock.record("stack", self.resolution);
         r.young = self.material.young_modulus as f64;
         r.rest_com = Some(flock.com_height(1) as f64);
@@ -441,12 +461,7 @@ impl Default for PileScene {
             bodies: 10,
             size: 0.2,
             resolution: 4,
-            material: Material {
-                density: 400.0,
-                young_modulus: 1e5,
-                damping_ratio: 0.5,
-                ..Default::default()
-            },
+            material: cube_material(0.5),
             bowl: 0.0,
             dt: 1.0 / 60.0,
             seconds: 3.0,
@@ -502,20 +517,12 @@ impl PileScene {
             })
             .collect();
         let mut flock = Flock::new(world, self.subject, specs)?;
-        let steps = (self.seconds / self.dt).round() as usize;
-        let rest_from = steps.saturating_sub((1.0 / self.dt).round() as usize);
-        let mut watch = Watch::new(&flock);
         let mut lowest = Real::INFINITY;
-        for k in 0..steps {
-            flock.step();
-            // The interpenetration of many bodies is costly: every tenth step, then each step
-            // of the last second.
-            watch.observe(&flock, k >= rest_from, k % 10 == 0);
-            lowest = lowest.min(flock.lowest());
-            if flock.exploded {
-                break;
-            }
-        }
+        // The interpenetration of many bodies is costly: every tenth step, then each step of
+        // the last second.
+        let watch = Watch::run(&mut flock, self.dt, self.seconds, 10, |f| {
+            lowest = lowest.min(f.lowest());
+        });
         let mut r = flock.record("pile", self.resolution);
         r.young = self.material.young_modulus as f64;
         r.max_penetration = Some((-lowest).max(0.0) as f64);
@@ -553,12 +560,7 @@ impl Default for SqueezeScene {
             subject: Subject::Sinew(ElementModel::EdgeRepulsion),
             radius: 0.2,
             spacing: 0.1,
-            material: Material {
-                density: 400.0,
-                young_modulus: 1e5,
-                damping_ratio: 0.8,
-                ..Default::default()
-            },
+            material: cube_material(0.8),
             load: 10.0,
             dt: 1.0 / 60.0,
             seconds: 3.0,
@@ -595,16 +597,7 @@ impl SqueezeScene {
             ColliderBuilder::new(cuboid(box_half)).density(self.load / box_volume),
         );
         let mut flock = Flock::new(world, self.subject, specs)?;
-        let steps = (self.seconds / self.dt).round() as usize;
-        let rest_from = steps.saturating_sub((1.0 / self.dt).round() as usize);
-        let mut watch = Watch::new(&flock);
-        for k in 0..steps {
-            flock.step();
-            watch.observe(&flock, k >= rest_from, true);
-            if flock.exploded {
-                break;
-            }
-        }
+        let watch = Watch::run(&mut flock, self.dt, self.seconds, 1, |_| {});
         let mut r = flock.record(
             "squeeze",
             (2.0 * self.radius / self.spacing).round() as usize,
