@@ -14,10 +14,9 @@ use super::super::lib::DeformableWorld;
 use super::super::lib::Material;
 use super::fall::cuboid;
 use super::metrics::interpenetration;
-use super::sim::{insert_soft, lumped_masses, rest_positions, BodySpec, Soft};
+use super::sim::{insert_soft, lumped_masses, read_state, rest_positions, BodySpec, Soft};
 use super::subject::Subject;
 use super::Record;
-use crate::record::{EXPLODED_DISTANCE, EXPLODED_SPEED};
 
 /// One body of a [`Flock`].
 struct Member {
@@ -100,27 +99,9 @@ impl Flock {
 
     fn read_back(&mut self) {
         for m in &mut self.members {
-            match m.soft {
-                Soft::Sinew(h) => {
-                    if let Some(d) = self.world.deformables.get(h) {
-                        m.x.copy_from_slice(d.positions());
-                        m.v.copy_from_slice(d.velocities());
-                    }
-                }
-                Soft::Rapier(h) => {
-                    if let Some(sb) = self.world.physics.soft_bodies.get(h) {
-                        for (i, p) in sb.particles().iter().enumerate().take(m.x.len()) {
-                            m.x[i] = p.position();
-                            m.v[i] = p.velocity();
-                        }
-                    }
-                }
-            }
-            let finite = m.x.iter().chain(&m.v).all(|p| p.is_finite());
-            self.nan |= !finite;
-            let far = m.x.iter().any(|p| p.length() as f64 > EXPLODED_DISTANCE)
-                || m.v.iter().any(|v| v.length() as f64 > EXPLODED_SPEED);
-            self.exploded |= !finite || far;
+            let (nan, exploded) = read_state(&self.world, m.soft, &mut m.x, &mut m.v);
+            self.nan |= nan;
+            self.exploded |= exploded;
         }
     }
 

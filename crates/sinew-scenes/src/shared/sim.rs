@@ -197,6 +197,37 @@ pub(crate) fn insert_soft(
     })
 }
 
+/// Copies the node state of `soft` (sinew's or rapier's body) in `world` into `x` and `v`;
+/// returns whether it is non-finite and whether it blew up (non-finite, or a node past
+/// [`EXPLODED_DISTANCE`] or [`EXPLODED_SPEED`]).
+pub(crate) fn read_state(
+    world: &DeformableWorld,
+    soft: Soft,
+    x: &mut [Vector],
+    v: &mut [Vector],
+) -> (bool, bool) {
+    match soft {
+        Soft::Sinew(h) => {
+            if let Some(d) = world.deformables.get(h) {
+                x.copy_from_slice(d.positions());
+                v.copy_from_slice(d.velocities());
+            }
+        }
+        Soft::Rapier(h) => {
+            if let Some(sb) = world.physics.soft_bodies.get(h) {
+                for (i, p) in sb.particles().iter().enumerate().take(x.len()) {
+                    x[i] = p.position();
+                    v[i] = p.velocity();
+                }
+            }
+        }
+    }
+    let finite = x.iter().chain(v.iter()).all(|p| p.is_finite());
+    let far = x.iter().any(|p| p.length() as f64 > EXPLODED_DISTANCE)
+        || v.iter().any(|v| v.length() as f64 > EXPLODED_SPEED);
+    (!finite, !finite || far)
+}
+
 fn cell_kind_error(kind: CellKind) -> BuildError {
     BuildError::UnsupportedCells {
         model: "rapier soft body",
@@ -344,27 +375,9 @@ impl Sim {
     }
 
     fn read_back(&mut self) {
-        match self.soft {
-            Soft::Sinew(h) => {
-                if let Some(d) = self.world.deformables.get(h) {
-                    self.x.copy_from_slice(d.positions());
-                    self.v.copy_from_slice(d.velocities());
-                }
-            }
-            Soft::Rapier(h) => {
-                if let Some(sb) = self.world.physics.soft_bodies.get(h) {
-                    for (i, p) in sb.particles().iter().enumerate().take(self.x.len()) {
-                        self.x[i] = p.position();
-                        self.v[i] = p.velocity();
-                    }
-                }
-            }
-        }
-        let finite = self.x.iter().chain(&self.v).all(|p| p.is_finite());
-        self.nan |= !finite;
-        let far = self.x.iter().any(|p| p.length() as f64 > EXPLODED_DISTANCE)
-            || self.v.iter().any(|v| v.length() as f64 > EXPLODED_SPEED);
-        self.exploded |= !finite || far;
+        let (nan, exploded) = read_state(&self.world, self.soft, &mut self.x, &mut self.v);
+        self.nan |= nan;
+        self.exploded |= exploded;
         let (mut inverted, mut min_ratio) = (0, Real::INFINITY);
         for c in 0..self.mesh.num_cells() {
             let q = self.mesh.cell_quality(c, &self.x);
