@@ -52,6 +52,16 @@ pub mod math {
         det(&[p[1] - p[0], p[2] - p[0]]) / DIM_FACTORIAL
     }
 
+    /// `DIM_FACTORIAL ×` the signed area of the triangle `p`, `D = det(p1 − p0, p2 − p0)`, and
+    /// its gradient with respect to each vertex (`g_a` is the opposite edge turned a quarter,
+    /// its length long, pointing to `a`'s side when `D > 0`; they sum to zero).
+    #[inline]
+    pub fn simplex_gradients(p: &[Vector; SIMPLEX_ARITY]) -> (Real, [Vector; SIMPLEX_ARITY]) {
+        let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+        let (g1, g2) = (-e2.perp(), e1.perp());
+        (e1.dot(g1), [-(g1 + g2), g1, g2])
+    }
+
     /// A surface facet as a parry shape (a segment).
     pub type FacetShape = rapier2d::parry::shape::Segment;
 

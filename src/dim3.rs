@@ -54,6 +54,16 @@ pub mod math {
         det(&[p[1] - p[0], p[2] - p[0], p[3] - p[0]]) / DIM_FACTORIAL
     }
 
+    /// `DIM_FACTORIAL ×` the signed volume of the simplex `p`, `D = det(p1 − p0, p2 − p0, p3 − p0)`,
+    /// and its gradient with respect to each vertex (`g_a` is the area vector of the facet
+    /// opposite `a`, twice its area long, pointing to `a`'s side when `D > 0`; they sum to zero).
+    #[inline]
+    pub fn simplex_gradients(p: &[Vector; SIMPLEX_ARITY]) -> (Real, [Vector; SIMPLEX_ARITY]) {
+        let (e1, e2, e3) = (p[1] - p[0], p[2] - p[0], p[3] - p[0]);
+        let (g1, g2, g3) = (e2.cross(e3), e3.cross(e1), e1.cross(e2));
+        (e1.dot(g1), [-(g1 + g2 + g3), g1, g2, g3])
+    }
+
     /// A surface facet as a parry shape (a triangle).
     pub type FacetShape = rapier3d::parry::shape::Triangle;
 

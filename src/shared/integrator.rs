@@ -28,8 +28,9 @@ pub(crate) trait Integrate {
     fn bound(&self, body: &Deformable) -> Bound;
 
     /// Advances every node's velocity over `h` under the element forces and gravity `g`
-    /// (bones and contacts come after, in the loop).
-    fn advance_velocities(&self, body: &mut Deformable, g: Vector, h: Real);
+    /// (bones and contacts come after, in the loop; `contacts_follow` when the body has
+    /// contact candidates this substep).
+    fn advance_velocities(&self, body: &mut Deformable, g: Vector, h: Real, contacts_follow: bool);
 
     /// After the bones and the contacts set some nodes' velocities (`before`: the velocities
     /// they found), lets the others answer them within the substep; returns whether it did
@@ -43,6 +44,11 @@ pub(crate) trait Integrate {
         _before: &[Vector],
     ) -> bool {
         false
+    }
+
+    /// Whether the step reads the element forces ([`Deformable::refresh_forces`]) for `body`.
+    fn uses_forces(&self, _body: &Deformable) -> bool {
+        true
     }
 
     /// Whether [`Integrate::after_contacts`] does anything for `body`.
@@ -65,7 +71,7 @@ impl Integrate for SymplecticEuler {
         }
     }
 
-    fn advance_velocities(&self, body: &mut Deformable, g: Vector, h: Real) {
+    fn advance_velocities(&self, body: &mut Deformable, g: Vector, h: Real, _: bool) {
         let force = &body.step.acc.force;
         let inv_masses = &body.rest.inv_masses;
         for ((v, f), w) in body.state.velocities.iter_mut().zip(force).zip(inv_masses) {
@@ -83,8 +89,10 @@ pub enum Integrator {
     #[default]
     Explicit,
     /// Backward Euler by Vertex Block Descent: one substep per step, `iterations` Gauss–Seidel
-    /// sweeps of per-node Newton steps (the cost knob; `docs/ARCHITECTURE.md` §4.2). Springs,
-    /// nonlinear springs and edge repulsion so far; the other models step explicitly.
+    /// sweeps of per-node Newton steps (the cost knob; `docs/ARCHITECTURE.md` §4.2). A body
+    /// with contact candidates first takes one sweep to find where it is going, the contacts
+    /// act on that, then `iterations` sweeps answer them with the nodes they stopped held.
+    /// Springs, nonlinear springs and edge repulsion so far; the other models step explicitly.
     Implicit {
         /// Sweeps per step.
         iterations: usize,
@@ -115,35 +123,58 @@ impl Integrate for Integrator {
         }
     }
 
-    fn advance_velocities(&self, body: &mut Deformable, g: Vector, h: Real) {
+    fn advance_velocities(&self, body: &mut Deformable, g: Vector, h: Real, contacts_follow: bool) {
         let Some(iterations) = self.implicit_for(body) else {
-            return SymplecticEuler.advance_velocities(body, g, h);
+            return SymplecticEuler.advance_velocities(body, g, h, contacts_follow);
         };
-        // Bound nodes keep the velocity the last bone drive gave them; the drive follows.
-        let (x0, v) = (&body.state.positions, &body.state.velocities);
-        let held: Vec<Option<Vector>> = (0..x0.len())
-            .map(|i| body.is_attached(i as u32).then(|| x0[i] + v[i] * h))
-            .collect();
-        implicit_pass(body, g, h, iterations, &held, false);
+        // Bound nodes keep the velocity the last bone drive gave them; the drive follows. When
+        // contacts follow, this solve only tells them where the body is going (the solve after
+        // them starts afresh): one sweep.
+        let held = held_nodes(body, h, None);
+        let sweeps = if contacts_follow { 1 } else { iterations };
+        implicit_pass(body, g, h, sweeps, &held, false);
     }
 
     fn answers_contacts(&self, body: &Deformable) -> bool {
         self.implicit_for(body).is_some()
     }
 
+    /// The implicit step evaluates its own terms.
+    fn uses_forces(&self, body: &Deformable) -> bool {
+        self.implicit_for(body).is_none()
+    }
+
     fn after_contacts(&self, body: &mut Deformable, g: Vector, h: Real, before: &[Vector]) -> bool {
         let Some(iterations) = self.implicit_for(body) else {
             return false;
         };
-        // The nodes the bones and the contacts set (their velocity changed, or bound) are held
-        // where those velocities take them; the others answer them in the same step.
-        let (x0, v) = (&body.state.positions, &body.state.velocities);
-        let held: Vec<Option<Vector>> = (0..x0.len())
-            .map(|i| (body.is_attached(i as u32) || v[i] != before[i]).then(|| x0[i] + v[i] * h))
-            .collect();
-        implicit_pass(body, g, h, iterations, &held, true);
+        let held = held_nodes(body, h, Some(before));
+        let stopped = held
+            .iter()
+            .enumerate()
+            .any(|(i, x)| x.is_some() && !body.is_attached(i as u32));
+        if stopped {
+            // The nodes the contacts set are held where their velocities take them; the
+            // others answer them in the same step, from the start.
+            implicit_pass(body, g, h, iterations, &held, false);
+        } else if iterations > 1 {
+            // No contact acted: the prediction was the step; it takes the remaining sweeps.
+            implicit_pass(body, g, h, iterations - 1, &held, true);
+        }
         true
     }
+}
+
+/// Where each held node ends the step: a bound node, and (with `before`, the velocities before
+/// the contacts) a node whose velocity a contact changed, where its velocity takes it.
+fn held_nodes(body: &Deformable, h: Real, before: Option<&[Vector]>) -> Vec<Option<Vector>> {
+    let (x0, v) = (&body.state.positions, &body.state.velocities);
+    (0..x0.len())
+        .map(|i| {
+            let set = body.is_attached(i as u32) || before.is_some_and(|b| v[i] != b[i]);
+            set.then(|| x0[i] + v[i] * h)
+        })
+        .collect()
 }
 
 /// One implicit solve of `body` over `h` (free nodes from their velocity at the start of the

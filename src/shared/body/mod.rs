@@ -193,7 +193,8 @@ impl Deformable {
 
     /// The element forces the last substep used, evaluated at the positions that substep
     /// started from (zero before the first step); without gravity or contacts. Unlike
-    /// [`Deformable::element_forces`] this changes nothing.
+    /// [`Deformable::element_forces`] this changes nothing. The implicit integrator evaluates
+    /// its own terms and leaves these as the last explicit substep left them.
     pub fn last_element_forces(&self) -> &[Vector] {
         &self.step.acc.force
     }

@@ -167,7 +167,9 @@ fn next_substep(
     let mut out = false;
     for &i in live {
         let m = &mut members[i];
-        timed(&mut m.times.forces, || m.body.refresh_forces());
+        if integrator.uses_forces(m.body) {
+            timed(&mut m.times.forces, || m.body.refresh_forces());
+        }
         match substep_size(integrator.bound(m.body), ctx, remaining, &mut m.stats) {
             Some(hi) => h = h.min(hi),
             None => out = true,
@@ -200,7 +202,8 @@ fn advance(
     body.step
         .scratch_velocities
         .copy_from_slice(&body.state.velocities);
-    integrator.advance_velocities(body, g, at.h);
+    let contacts_follow = !m.candidates.is_empty();
+    integrator.advance_velocities(body, g, at.h, contacts_follow);
 
     // Bound nodes follow their bones.
     let nodes = DrivenNodes {
