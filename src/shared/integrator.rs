@@ -92,7 +92,7 @@ pub enum Integrator {
     /// sweeps of per-node Newton steps (the cost knob; `docs/ARCHITECTURE.md` §4.2). A body
     /// with contact candidates first takes one sweep to find where it is going, the contacts
     /// act on that, then `iterations` sweeps answer them with the nodes they stopped held.
-    /// Springs, nonlinear springs and edge repulsion so far; the other models step explicitly.
+    /// Every model but centroid springs, which steps explicitly.
     Implicit {
         /// Sweeps per step.
         iterations: usize,
@@ -100,7 +100,12 @@ pub enum Integrator {
 }
 
 impl Integrator {
-    /// Whether `body` takes the implicit step.
+    /// Whether `body` takes the implicit step (one substep per step).
+    pub(crate) fn steps_implicitly(&self, body: &Deformable) -> bool {
+        self.implicit_for(body).is_some()
+    }
+
+    /// Whether `body` takes the implicit step, and its sweeps.
     fn implicit_for(&self, body: &Deformable) -> Option<usize> {
         match *self {
             Integrator::Implicit { iterations } if body.state.elements.has_implicit() => {

@@ -231,7 +231,7 @@ pub(crate) struct ModelState {
     elements: Elements,
     bounds: NodeBounds,
     /// Which terms touch each node, for the implicit step (made when first needed).
-    incidence: std::sync::OnceLock<implicit::Incidence>,
+    incidence: std::sync::OnceLock<Option<implicit::Incidence>>,
     #[cfg(feature = "parallel")]
     split: Option<parallel::Split>,
 }

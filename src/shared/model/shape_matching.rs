@@ -382,3 +382,62 @@ fn cell_forces<const N: usize>(
     let vs = ids.map(|i| v[i as usize]);
     element_forces(rest, &xs, &vs, law, warm)
 }
+
+/// The implicit step's view of the cells (`implicit.rs`): the rotation of each cell is held
+/// while the nodes sweep, and refitted between sweeps.
+impl ShapeMatching {
+    /// Vertices per cell.
+    pub(super) fn arity(&self) -> usize {
+        self.arity
+    }
+
+    /// The cells' vertex indices, `arity` per cell.
+    pub(super) fn cell_indices(&self) -> &[u32] {
+        &self.cells
+    }
+
+    /// The cells' warm-start rotations, for the implicit step to advance.
+    pub(super) fn rotations_mut(&mut self) -> &mut [Rotation] {
+        &mut self.rotations
+    }
+
+    /// Vertex `a`'s residual `r_a − q R0_a` in `cell` at `x`, offsets from the centroid.
+    #[inline]
+    pub(super) fn residual(&self, cell: usize, a: usize, x: &[Vector], q: Rotation) -> Vector {
+        let n = self.arity;
+        let ids = &self.cells[cell * n..(cell + 1) * n];
+        let o = x[ids[0] as usize];
+        let xc = ids.iter().map(|&i| x[i as usize] - o).sum::<Vector>() / n as Real;
+        (x[ids[a] as usize] - o) - xc - q * self.rest[cell * n + a]
+    }
+
+    /// Refits every cell's rotation at `x`, each from its value in `rotations`.
+    pub(super) fn refit(&self, x: &[Vector], rotations: &mut [Rotation]) {
+        let n = self.arity;
+        let mut r = [Vector::ZERO; CUBE_ARITY];
+        for (cell, q) in rotations.iter_mut().enumerate() {
+            let ids = &self.cells[cell * n..(cell + 1) * n];
+            let o = x[ids[0] as usize];
+            let xc = ids.iter().map(|&i| x[i as usize] - o).sum::<Vector>() / n as Real;
+            for (r, &i) in r.iter_mut().zip(ids) {
+                *r = (x[i as usize] - o) - xc;
+            }
+            let rest = &self.rest[cell * n..(cell + 1) * n];
+            *q = fit_rotation(rest, &r[..n], self.fit, *q);
+        }
+    }
+
+    /// A simplex cell's signed volume at `x` over its rest volume.
+    pub(super) fn volume_ratio(&self, cell: usize, x: &[Vector]) -> Real {
+        let n = self.arity;
+        let ids = &self.cells[cell * n..(cell + 1) * n];
+        let now: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
+        let rest: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| self.rest[cell * n + a]);
+        math::simplex_volume(&now) / math::simplex_volume(&rest)
+    }
+
+    /// Stiffness and damping per vertex of `cell`.
+    pub(super) fn law(&self, cell: usize) -> (Real, Real) {
+        (self.k[cell], self.c[cell])
+    }
+}
