@@ -16,6 +16,8 @@ use sinew_scenes::record::Record;
 pub enum Scene {
     /// A soft cube dropped on the ground.
     Fall,
+    /// A 10 cm silicone ball (E = 1 MPa, 2 cm cells) dropped on the ground at 60 Hz.
+    Ball,
     /// Cooper & Maddock's limb, bent to 110°.
     Limb,
     /// A heavy box crushing a soft cube, then lifted away.
@@ -275,6 +277,7 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 fn table_header(scene: Scene) -> String {
     let extra = match scene {
         Scene::Fall => "  apex m  rest m   pen mm",
+        Scene::Ball => "  apex m  rest m   pen mm  ms/step",
         Scene::Limb => " failure°  anchor m  self mm",
         Scene::Crush => "    mass kg  pen mm  shape err  failure kg",
         Scene::Manipulator => "  rest m  shape err  failure strike",
@@ -299,6 +302,13 @@ fn table_row(scene: Scene, r: &Record) -> String {
             opt(r.bounce_apex_com, 3),
             opt(r.rest_com, 3),
             opt(r.max_penetration.map(|p| p * 1e3), 2)
+        ),
+        Scene::Ball => format!(
+            "  {:>6}  {:>6}  {:>7}  {:>7.2}",
+            opt(r.bounce_apex_com, 3),
+            opt(r.rest_com, 3),
+            opt(r.max_penetration.map(|p| p * 1e3), 2),
+            r.wall_per_sim_s() * r.dt * 1e3
         ),
         Scene::Limb => format!(
             " {:>9}  {:>8}  {:>7}",
@@ -397,7 +407,7 @@ macro_rules! dimension_runner {
             use sinew::$dim::{DeformableWorld, ElementModel, RotationFit};
             use sinew_scenes::record::Record;
             use sinew_scenes::$dim::{
-                dt_sweep, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
+                dt_sweep, BallScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
                 ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
                 StackScene, Subject, CRUSH_MASSES,
             };
@@ -545,6 +555,19 @@ macro_rules! dimension_runner {
                         }
                         Scene::DtSweep => {
                             observed(args, name, |o| dt_sweep(&cube, o)).map_err(err)?
+                        }
+                        Scene::Ball => {
+                            let d = BallScene::default();
+                            let scene = BallScene {
+                                subject,
+                                dt: args.dt.map_or(d.dt, |v| v as Real),
+                                seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                                young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
+                                poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                                integrator: cube.integrator,
+                                ..d
+                            };
+                            vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
                         }
                         Scene::Limb => {
                             let d = LimbScene::default();

@@ -10,7 +10,7 @@
 
 use super::body::Deformable;
 use super::math::{Real, Vector};
-use super::model::{self, StepInput};
+use super::model::{self, Hold, StepInput};
 
 /// How long the next substep may be at the body's current state.
 #[derive(Copy, Clone, Debug)]
@@ -20,6 +20,15 @@ pub(crate) struct Bound {
     /// The crossing limiter's bound (s): no node crosses its opposite facet's plane within it,
     /// whatever the integrator (infinite for models without one).
     pub limiter: Real,
+}
+
+/// What the contacts did, for [`Integrate::after_contacts`].
+#[derive(Copy, Clone)]
+pub(crate) struct AfterContacts<'a> {
+    /// The velocities before the contacts.
+    pub before: &'a [Vector],
+    /// Per node, the normal of the collider that stopped it (it may lift off along it).
+    pub lift: &'a [Option<Vector>],
 }
 
 /// One way of advancing a body's velocities over a substep.
@@ -32,16 +41,15 @@ pub(crate) trait Integrate {
     /// contact candidates this substep).
     fn advance_velocities(&self, body: &mut Deformable, g: Vector, h: Real, contacts_follow: bool);
 
-    /// After the bones and the contacts set some nodes' velocities (`before`: the velocities
-    /// they found), lets the others answer them within the substep; returns whether it did
-    /// (then the loop solves the contacts once more). Explicit integrators leave it to the
-    /// next substep.
+    /// After the bones and the contacts set some nodes' velocities, lets the others answer
+    /// them within the substep; returns whether it did (then the loop solves the contacts
+    /// once more). Explicit integrators leave it to the next substep.
     fn after_contacts(
         &self,
         _body: &mut Deformable,
         _g: Vector,
         _h: Real,
-        _before: &[Vector],
+        _at: AfterContacts<'_>,
     ) -> bool {
         false
     }
@@ -149,15 +157,21 @@ impl Integrate for Integrator {
         self.implicit_for(body).is_none()
     }
 
-    fn after_contacts(&self, body: &mut Deformable, g: Vector, h: Real, before: &[Vector]) -> bool {
+    fn after_contacts(
+        &self,
+        body: &mut Deformable,
+        g: Vector,
+        h: Real,
+        at: AfterContacts<'_>,
+    ) -> bool {
         let Some(iterations) = self.implicit_for(body) else {
             return false;
         };
-        let held = held_nodes(body, h, Some(before));
+        let held = held_nodes(body, h, Some(at));
         let stopped = held
             .iter()
             .enumerate()
-            .any(|(i, x)| x.is_some() && !body.is_attached(i as u32));
+            .any(|(i, x)| *x != Hold::Free && !body.is_attached(i as u32));
         if stopped {
             // The nodes the contacts set are held where their velocities take them; the
             // others answer them in the same step, from the start.
@@ -170,14 +184,33 @@ impl Integrate for Integrator {
     }
 }
 
-/// Where each held node ends the step: a bound node, and (with `before`, the velocities before
-/// the contacts) a node whose velocity a contact changed, where its velocity takes it.
-fn held_nodes(body: &Deformable, h: Real, before: Option<&[Vector]>) -> Vec<Option<Vector>> {
+/// How each node is held: a bound node where its bone takes it, and (after the contacts) a
+/// node whose velocity a contact changed where that velocity takes it, free to lift off a
+/// collider along its normal.
+fn held_nodes(body: &Deformable, h: Real, after: Option<AfterContacts<'_>>) -> Vec<Hold> {
     let (x0, v) = (&body.state.positions, &body.state.velocities);
     (0..x0.len())
         .map(|i| {
-            let set = body.is_attached(i as u32) || before.is_some_and(|b| v[i] != b[i]);
-            set.then(|| x0[i] + v[i] * h)
+            let at = x0[i] + v[i] * h;
+            if body.is_attached(i as u32) {
+                return Hold::At(at);
+            }
+            match after {
+                Some(a) if v[i] != a.before[i] => match a.lift[i] {
+                    Some(normal) => {
+                        // The lowest it may end if it lifts off: where it is, or where the
+                        // contact takes it if that is lower (no bounce).
+                        let rise = normal.dot(at - x0[i]).max(0.0);
+                        Hold::Contact {
+                            target: at,
+                            normal,
+                            low: at - normal * rise,
+                        }
+                    }
+                    None => Hold::At(at),
+                },
+                _ => Hold::Free,
+            }
         })
         .collect()
 }
@@ -190,7 +223,7 @@ fn implicit_pass(
     g: Vector,
     h: Real,
     iterations: usize,
-    held: &[Option<Vector>],
+    held: &[Hold],
     warm: bool,
 ) {
     let mut x = Vec::new();
@@ -214,7 +247,7 @@ fn implicit_pass(
     body.state.elements.implicit_step(&input, &mut x);
     let x0 = &body.state.positions;
     for (i, v) in body.state.velocities.iter_mut().enumerate() {
-        if held[i].is_none() {
+        if !matches!(held[i], Hold::At(_)) {
             *v = (x[i] - x0[i]) / h;
         }
     }

@@ -33,6 +33,18 @@
 //! 60 Hz fall inverted 164 cells at the impact: the contact threw the bottom nodes back up
 //! through the layer above, still falling.
 //!
+//! Held nodes ([`Hold`]): a bound node ends where its bone takes it. A node a collider stopped
+//! (or threw back, with restitution) ends where the contact set it, unless that leaves one of
+//! its cells too flat to start from: then it starts where it started the step and may end
+//! anywhere on the free side of the collider's plane, its inertia drawing it to where the
+//! contact set it, its cells' barriers pushing it off (`Hold::Above`; the lift-off's Newton
+//! step is the quadratic model's minimiser on that side). A 60 Hz silicone ball needed both: its
+//! bottom nodes, thrown back by the contact, passed through the 2 cm layer above them, and a
+//! cell of four surface nodes pressed flat onto the floor could not be pushed off it (a Newton
+//! step on a barrier at `h ≈ 0` barely moves). Letting every contact node lift off always made
+//! a resting cube climb at two or three sweeps (0.50 → 0.55 m in 3 s): the unconverged sweeps
+//! ratchet it up. The sweeps alternate their order (forward, backward).
+//!
 //! Springs, nonlinear springs, edge repulsion and shape matching have this step; centroid
 //! springs take the explicit one.
 
@@ -149,15 +161,112 @@ fn unit(d: usize) -> Vector {
     e
 }
 
+/// How a node is held over an implicit step.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) enum Hold {
+    /// Free.
+    Free,
+    /// Ends the step here (bound to a bone, or set by a contact on a facet).
+    At(Vector),
+    /// Ends the step at `at` or further along `normal`, its inertia drawing it to `target` (a
+    /// node a collider stopped, or threw back to `target`: it may lift off further, so a cell of
+    /// nodes all pressed onto a floor is not flattened with them, and its cells may hold it
+    /// back from the bounce).
+    Above {
+        at: Vector,
+        normal: Vector,
+        target: Vector,
+    },
+    /// A node a collider stopped (or threw back) to `target`: held there
+    /// ([`Hold::At`]) unless that leaves one of its cells too flat to start from, then lifted
+    /// off the collider's plane through `low` along `normal` ([`Hold::Above`]).
+    Contact {
+        target: Vector,
+        normal: Vector,
+        low: Vector,
+    },
+}
+
+impl Hold {
+    /// Where a held node's inertia draws it (and, without a lift-off, where it ends).
+    fn at(self) -> Option<Vector> {
+        match self {
+            Hold::Free => None,
+            Hold::At(at) | Hold::Above { target: at, .. } | Hold::Contact { target: at, .. } => {
+                Some(at)
+            }
+        }
+    }
+
+    /// A contact held where it was set.
+    fn held(self) -> Self {
+        match self {
+            Hold::Contact { target, .. } => Hold::At(target),
+            other => other,
+        }
+    }
+
+    /// A contact lifted off.
+    fn lifted(self) -> Self {
+        match self {
+            Hold::Contact {
+                target,
+                normal,
+                low,
+            } => Hold::Above {
+                at: low,
+                normal,
+                target,
+            },
+            other => other,
+        }
+    }
+
+    /// Where the sweeps start node with this hold: `free` if free, a lift-off node where it
+    /// started the step (`x0`, kept above the plane), so the sweeps bring it down onto the
+    /// collider with its cells' barriers in play. (Started on the plane, a cell of four
+    /// surface nodes was flat, and a Newton step on a barrier at `h ≈ 0` barely moves it.)
+    fn start(self, free: Vector, x0: Vector) -> Vector {
+        match self {
+            Hold::Free => free,
+            Hold::At(at) | Hold::Contact { target: at, .. } => at,
+            Hold::Above { .. } => self.project(x0),
+        }
+    }
+
+    /// The Newton step `H⁻¹ f` from `x`, for a lift-off node the minimiser of the quadratic
+    /// model on the free side of its plane: `H⁻¹ (f + λ n)`, `λ ≥ 0` the least that keeps it
+    /// there (projecting `H⁻¹ f` instead can raise the energy where `H` is not isotropic).
+    fn constrained_step(self, x: Vector, inverse: Matrix, f: Vector) -> Vector {
+        let step = inverse * f;
+        let Hold::Above { at, normal, .. } = self else {
+            return step;
+        };
+        let short = normal.dot(at - x - step);
+        let along = normal.dot(inverse * normal);
+        if short <= 0.0 || along <= Real::MIN_POSITIVE {
+            return step;
+        }
+        step + inverse * normal * (short / along)
+    }
+
+    /// `x` kept on the free side of a lift-off's plane.
+    fn project(self, x: Vector) -> Vector {
+        match self {
+            Hold::Above { at, normal, .. } => at + normal * normal.dot(x - at).max(0.0),
+            _ => x,
+        }
+    }
+}
+
 /// The inputs of one implicit step.
 pub(crate) struct StepInput<'a> {
     /// Positions and velocities at the start of the step.
     pub x0: &'a [Vector],
     pub v0: &'a [Vector],
     pub masses: &'a [Real],
-    /// Where a held node ends the step (a bound node on its bone, a node a contact stopped),
-    /// `None` for a free one.
-    pub held: &'a [Option<Vector>],
+    /// How each node is held (a bound node on its bone, a node a contact stopped).
+    pub held: &'a [Hold],
     /// Where the sweeps start ([`StepInput::guess`] when `None`).
     pub start: Option<&'a [Vector]>,
     pub gravity: Vector,
@@ -188,12 +297,17 @@ impl ModelState {
         };
         let (x0, v0, h) = (input.x0, input.v0, input.h);
         let y: Vec<Vector> = (0..n)
-            .map(|i| input.held[i].unwrap_or(x0[i] + v0[i] * h + input.gravity * (h * h)))
+            .map(|i| {
+                input.held[i]
+                    .at()
+                    .unwrap_or(x0[i] + v0[i] * h + input.gravity * (h * h))
+            })
             .collect();
+        let mut held: Vec<Hold> = input.held.iter().map(|h| h.held()).collect();
         x.clear();
         match input.start {
-            Some(start) => x.extend((0..n).map(|i| input.held[i].unwrap_or(start[i]))),
-            None => x.extend((0..n).map(|i| input.held[i].unwrap_or(x0[i] + v0[i] * h))),
+            Some(start) => x.extend((0..n).map(|i| held[i].start(start[i], x0[i]))),
+            None => x.extend((0..n).map(|i| held[i].start(x0[i] + v0[i] * h, x0[i]))),
         }
         let mut vertex = Vertex {
             springs: None,
@@ -208,15 +322,21 @@ impl ModelState {
             Elements::EdgeRepulsion(e) => {
                 vertex.springs = Some(&e.edges);
                 vertex.er = Some(e);
-                if !all_upright(e, incidence, x) {
-                    restart(x, x0, input.held);
-                }
+                let upright = |c: usize, x: &[Vector]| cell_upright(e, incidence, c, x);
+                let start = Start {
+                    x0,
+                    given: input.held,
+                };
+                start.fix(&e.cells, SIMPLEX_ARITY, upright, x, &mut held);
             }
             Elements::ShapeMatching(sm) => {
-                let cells = sm.cell_indices().len() / sm.arity();
-                let simplex = sm.arity() == SIMPLEX_ARITY;
-                if simplex && (0..cells).any(|c| sm.volume_ratio(c, x) <= MIN_STEP_VOLUME) {
-                    restart(x, x0, input.held);
+                if sm.arity() == SIMPLEX_ARITY {
+                    let upright = |c: usize, x: &[Vector]| sm.volume_ratio(c, x) > MIN_STEP_VOLUME;
+                    let start = Start {
+                        x0,
+                        given: input.held,
+                    };
+                    start.fix(sm.cell_indices(), SIMPLEX_ARITY, upright, x, &mut held);
                 }
                 let rotations = sm.rotations_mut().to_vec();
                 let start = shape_residuals(sm, x0, &rotations);
@@ -228,14 +348,14 @@ impl ModelState {
             }
             Elements::CentroidSprings(_) => return false,
         }
-        sweep(&mut vertex, input, &y, x);
+        sweep(&mut vertex, input, &held, &y, x);
         if let Some(shape) = vertex.shape {
             let rotations = shape.rotations;
             if let Elements::ShapeMatching(sm) = elements {
                 sm.rotations_mut().copy_from_slice(&rotations);
             }
         }
-        if input.held.iter().all(Option::is_none) {
+        if held.iter().all(|h| *h == Hold::Free) {
             // The energy does not change under a translation, so the best one is exact: the
             // centre of mass where inertia and gravity take it. A few sweeps cannot move a
             // body much stiffer than `m/h²` as a whole; this makes its free flight ballistic.
@@ -250,12 +370,48 @@ impl ModelState {
     }
 }
 
-/// Puts the free nodes back where they started the step (the start the sweeps were given
-/// left a cell flatter than the line search allows: the held nodes moved through it).
-fn restart(x: &mut [Vector], x0: &[Vector], held: &[Option<Vector>]) {
-    for ((x, x0), held) in x.iter_mut().zip(x0).zip(held) {
-        if held.is_none() {
-            *x = *x0;
+/// Where the sweeps may start.
+struct Start<'a> {
+    x0: &'a [Vector],
+    /// The holds the step was given.
+    given: &'a [Hold],
+}
+
+impl Start<'_> {
+    /// Makes the start `x` one the line search can go on from, if a cell is too flat there
+    /// (the held nodes moved through it): the contact nodes of such cells lift off (from where
+    /// they started the step), then, if a cell still is, the free nodes go back to where they
+    /// started the step. (A 60 Hz ball bounced its bottom nodes up through the 2 cm layer
+    /// above, still falling, and every move of its nodes was then refused.)
+    fn fix(
+        &self,
+        cells: &[u32],
+        arity: usize,
+        upright: impl Fn(usize, &[Vector]) -> bool,
+        x: &mut [Vector],
+        held: &mut [Hold],
+    ) {
+        let count = cells.len() / arity;
+        let mut flat = false;
+        for c in 0..count {
+            if upright(c, x) {
+                continue;
+            }
+            flat = true;
+            for &i in &cells[c * arity..(c + 1) * arity] {
+                let i = i as usize;
+                if matches!(self.given[i], Hold::Contact { .. }) {
+                    held[i] = self.given[i].lifted();
+                    x[i] = held[i].start(x[i], self.x0[i]);
+                }
+            }
+        }
+        if flat && (0..count).any(|c| !upright(c, x)) {
+            for ((x, x0), held) in x.iter_mut().zip(self.x0).zip(held.iter()) {
+                if *held == Hold::Free {
+                    *x = *x0;
+                }
+            }
         }
     }
 }
@@ -263,14 +419,25 @@ fn restart(x: &mut [Vector], x0: &[Vector], held: &[Option<Vector>]) {
 /// The Gauss–Seidel sweeps: each free node's Newton step in turn. Shape-based cells fit their
 /// rotations once, where the sweeps start (inertia carries a turning cell's fit on), and hold
 /// them: refitting before every sweep cost 1.8× as much for the same fall.
-fn sweep(vertex: &mut Vertex<'_>, input: &StepInput<'_>, y: &[Vector], x: &mut [Vector]) {
+fn sweep(
+    vertex: &mut Vertex<'_>,
+    input: &StepInput<'_>,
+    held: &[Hold],
+    y: &[Vector],
+    x: &mut [Vector],
+) {
     let h = input.h;
     if let Some(shape) = &mut vertex.shape {
         shape.cells.refit(x, &mut shape.rotations);
     }
-    for _ in 0..input.iterations {
-        for i in 0..x.len() {
-            if input.held[i].is_some() {
+    let n = x.len();
+    for sweep in 0..input.iterations {
+        for j in 0..n {
+            // Forward, then backward: one order only leans the body (a cube on a floor tipped
+            // towards its first nodes).
+            let i = if sweep % 2 == 0 { j } else { n - 1 - j };
+            let hold = held[i];
+            if matches!(hold, Hold::At(_)) {
                 continue;
             }
             let inertia = input.masses[i] / (h * h);
@@ -278,8 +445,8 @@ fn sweep(vertex: &mut Vertex<'_>, input: &StepInput<'_>, y: &[Vector], x: &mut [
             let Some(inverse) = invert(block) else {
                 continue;
             };
-            let step = inverse * f;
-            x[i] = vertex.line_search(i, x, step);
+            let step = hold.constrained_step(x[i], inverse, f);
+            x[i] = vertex.line_search(i, x, step, hold);
         }
     }
 }
@@ -371,34 +538,40 @@ impl Vertex<'_> {
     /// `x_i + α step` with the largest `α ∈ {1, ½, ¼, …}` (ten halvings) that keeps every
     /// repulsion of the node's cells above [`MIN_STEP_HEIGHT`] of its rest height; the node
     /// stays if none does.
-    fn line_search(&self, i: usize, x: &mut [Vector], step: Vector) -> Vector {
+    fn line_search(&self, i: usize, x: &mut [Vector], step: Vector, hold: Hold) -> Vector {
         let start = x[i];
         let simplex_shapes = self
             .shape
             .as_ref()
             .filter(|s| s.cells.arity() == SIMPLEX_ARITY);
         if self.er.is_none() && simplex_shapes.is_none() {
-            return start + step;
+            return hold.project(start + step);
         }
-        // A shape-based cell the held nodes left flatter than the bound may not get flatter.
-        let floor = |cell: usize| match simplex_shapes {
-            Some(shape) => shape.cells.volume_ratio(cell, x).min(MIN_STEP_VOLUME),
-            None => 0.0,
+        // A cell that the held nodes left flatter than the bound may not get flatter (else
+        // it could never come back: every move of its free vertices would be refused).
+        let not_flatter = |x: &mut [Vector], measure: &dyn Fn(&[Vector]) -> Real| {
+            let after = measure(x);
+            let end = std::mem::replace(&mut x[i], start);
+            let before = measure(x);
+            x[i] = end;
+            after >= before
         };
-        let cells = self.incidence.cells_of(i);
-        let floors: Vec<Real> = cells.iter().map(|&(c, _)| floor(c as usize)).collect();
-        let upright = |x: &[Vector], (cell, floor): (usize, Real)| match (self.er, simplex_shapes) {
-            (Some(er), _) => cell_upright(er, self.incidence, cell, x),
-            (None, Some(shape)) => shape.cells.volume_ratio(cell, x) >= floor,
+        let upright = |x: &mut [Vector], cell: usize| match (self.er, simplex_shapes) {
+            (Some(er), _) => {
+                cell_upright(er, self.incidence, cell, x)
+                    || not_flatter(x, &|x| height_ratio(er, self.incidence, cell, x))
+            }
+            (None, Some(shape)) => {
+                shape.cells.volume_ratio(cell, x) > MIN_STEP_VOLUME
+                    || not_flatter(x, &|x| shape.cells.volume_ratio(cell, x))
+            }
             (None, None) => true,
         };
+        let cells = self.incidence.cells_of(i);
         let mut alpha = 1.0;
         for _ in 0..=10 {
-            x[i] = start + step * alpha;
-            let ok = cells
-                .iter()
-                .zip(&floors)
-                .all(|(&(cell, _), &floor)| upright(x, (cell as usize, floor)));
+            x[i] = hold.project(start + step * alpha);
+            let ok = cells.iter().all(|&(cell, _)| upright(x, cell as usize));
             if ok {
                 let end = x[i];
                 x[i] = start;
@@ -475,8 +648,13 @@ fn cell_upright(er: &EdgeRepulsion, incidence: &Incidence, cell: usize, x: &[Vec
         })
 }
 
-fn all_upright(er: &EdgeRepulsion, incidence: &Incidence, x: &[Vector]) -> bool {
-    (0..er.cells.len() / SIMPLEX_ARITY).all(|c| cell_upright(er, incidence, c, x))
+/// The smallest height of `cell`'s vertices over their rest heights (negative once inverted).
+fn height_ratio(er: &EdgeRepulsion, incidence: &Incidence, cell: usize, x: &[Vector]) -> Real {
+    let (d, g) = cell_geometry(er, incidence, cell, x);
+    g.iter()
+        .enumerate()
+        .map(|(b, gb)| d / (gb.length() * er.h0[cell * SIMPLEX_ARITY + b]).max(Real::MIN_POSITIVE))
+        .fold(Real::INFINITY, Real::min)
 }
 
 /// The inverse of a block, if it is well conditioned enough to have one.

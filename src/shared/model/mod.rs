@@ -61,7 +61,7 @@ pub mod springs;
 #[cfg(all(test, feature = "parallel"))]
 mod tests;
 
-pub(crate) use implicit::StepInput;
+pub(crate) use implicit::{Hold, StepInput};
 
 use super::error::BuildError;
 use super::material::Resolved;

@@ -6,7 +6,7 @@ use super::super::body::Deformable;
 use super::super::contact::soft;
 use super::super::contact::{self, FacetMotion, FreeNode};
 use super::super::coupling::{BodyMotion, Substep};
-use super::super::integrator::{Bound, Integrate};
+use super::super::integrator::{AfterContacts, Bound, Integrate};
 use super::super::math::{Real, Vector, FACET_ARITY};
 use super::super::rapier::dynamics::RigidBodySet;
 use super::super::set::DeformableHandle;
@@ -198,6 +198,7 @@ fn advance(
     let g = ctx.gravity * m.body.gravity_scale;
     let body = &mut *m.body;
     let sc = &mut *m.sc;
+    let answers = integrator.answers_contacts(body);
     // Velocities first (the contacts act on them), from the element forces and gravity.
     body.step
         .scratch_velocities
@@ -224,7 +225,6 @@ fn advance(
     let candidates = &mut m.candidates;
     if !candidates.is_empty() {
         let stats = &mut m.stats;
-        let answers = integrator.answers_contacts(body);
         let before = answers.then(|| body.state.velocities.clone());
         timed(&mut m.times.contacts, || {
             for c in candidates.iter_mut() {
@@ -239,7 +239,17 @@ fn advance(
         // An implicit integrator lets the rest of the body answer the contacts within the
         // step, then the contacts see the result.
         if let Some(before) = before {
-            if integrator.after_contacts(body, g, at.h, &before) {
+            let mut lift = vec![None; before.len()];
+            for c in sc.last_contact.iter().flatten() {
+                if let Some(i) = c.node {
+                    lift[i as usize] = Some(c.normal);
+                }
+            }
+            let after = AfterContacts {
+                before: &before,
+                lift: &lift,
+            };
+            if integrator.after_contacts(body, g, at.h, after) {
                 timed(&mut m.times.contacts, || {
                     let backward = stats.substeps % 2 == 1;
                     node_contacts(body, at, backward, bodies, sc, candidates);

@@ -19,6 +19,7 @@
 //! | [`StackScene`], [`PileScene`], [`SqueezeScene`] | a cell inverts, or bodies rest inside each other by over 1 % of their size | — |
 //! | [`FoldScene`] | the surface passes into itself (over 1 % of a cell) or a cell inverts | — |
 
+mod ball;
 mod cantilever;
 mod crush;
 mod fall;
@@ -34,6 +35,7 @@ pub mod testing;
 
 pub use crate::beam::{euler_bernoulli_tip_sag, sag_error};
 pub use crate::record::{Record, Spread};
+pub use ball::BallScene;
 pub use cantilever::{CantileverScene, SETTLED_WOBBLE};
 pub use crush::{CrushScene, CRUSH_MASSES};
 pub use fall::{dt_sweep, FallScene, DT_SWEEP_MS};
