@@ -99,7 +99,7 @@ pub struct Args {
     /// Strikes of the manipulator (default 20).
     #[arg(long)]
     pub strikes: Option<usize>,
-    /// sinew's integrator (fall, dt-sweep, crush, manipulator: the cube scenes).
+    /// sinew's integrator (fall, ball, limb, dt-sweep, crush, manipulator).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
     /// Gauss–Seidel sweeps per step of the implicit integrator (default 10). (`--iterations`
@@ -583,6 +583,7 @@ macro_rules! dimension_runner {
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
                                 self_contact: args.self_contact == Some(Switch::On),
+                                integrator: cube.integrator,
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]

@@ -27,8 +27,9 @@ pub(crate) struct Bound {
 pub(crate) struct AfterContacts<'a> {
     /// The velocities before the contacts.
     pub before: &'a [Vector],
-    /// Per node, the normal of the collider that stopped it (it may lift off along it).
-    pub lift: &'a [Option<Vector>],
+    /// Per node, the point (at the collider's pose at the end of the substep) and normal of
+    /// the collider surface that stopped it (it may lift off along the normal).
+    pub lift: &'a [Option<(Vector, Vector)>],
 }
 
 /// One way of advancing a body's velocities over a substep.
@@ -43,14 +44,17 @@ pub(crate) trait Integrate {
 
     /// After the bones and the contacts set some nodes' velocities, lets the others answer
     /// them within the substep; returns whether it did (then the loop solves the contacts
-    /// once more). Explicit integrators leave it to the next substep.
+    /// once more), with `reactions` the force each held node's hold exerted on it over the
+    /// substep (empty when none). Explicit integrators leave it to the next substep.
     fn after_contacts(
         &self,
         _body: &mut Deformable,
         _g: Vector,
         _h: Real,
         _at: AfterContacts<'_>,
+        reactions: &mut Vec<Vector>,
     ) -> bool {
+        reactions.clear();
         false
     }
 
@@ -145,7 +149,7 @@ impl Integrate for Integrator {
         // them starts afresh): one sweep.
         let held = held_nodes(body, h, None);
         let sweeps = if contacts_follow { 1 } else { iterations };
-        implicit_pass(body, g, h, sweeps, &held, false);
+        implicit_pass(body, g, h, sweeps, &held, false, &mut Vec::new());
     }
 
     fn answers_contacts(&self, body: &Deformable) -> bool {
@@ -163,7 +167,9 @@ impl Integrate for Integrator {
         g: Vector,
         h: Real,
         at: AfterContacts<'_>,
+        reactions: &mut Vec<Vector>,
     ) -> bool {
+        reactions.clear();
         let Some(iterations) = self.implicit_for(body) else {
             return false;
         };
@@ -175,10 +181,10 @@ impl Integrate for Integrator {
         if stopped {
             // The nodes the contacts set are held where their velocities take them; the
             // others answer them in the same step, from the start.
-            implicit_pass(body, g, h, iterations, &held, false);
+            implicit_pass(body, g, h, iterations, &held, false, reactions);
         } else if iterations > 1 {
             // No contact acted: the prediction was the step; it takes the remaining sweeps.
-            implicit_pass(body, g, h, iterations - 1, &held, true);
+            implicit_pass(body, g, h, iterations - 1, &held, true, reactions);
         }
         true
     }
@@ -197,14 +203,16 @@ fn held_nodes(body: &Deformable, h: Real, after: Option<AfterContacts<'_>>) -> V
             }
             match after {
                 Some(a) if v[i] != a.before[i] => match a.lift[i] {
-                    Some(normal) => {
-                        // The lowest it may end if it lifts off: where it is, or where the
-                        // contact takes it if that is lower (no bounce).
+                    Some((point, normal)) => {
+                        // If it lifts off, the lowest it may end: where the contact set it less
+                        // the part of that which rises from where it was (a bounce), but never
+                        // under the collider's surface (a collider moving into it carries it).
                         let rise = normal.dot(at - x0[i]).max(0.0);
+                        let off = normal.dot(at - point).max(0.0);
                         Hold::Contact {
                             target: at,
                             normal,
-                            low: at - normal * rise,
+                            low: at - normal * rise.min(off),
                         }
                     }
                     None => Hold::At(at),
@@ -225,6 +233,7 @@ fn implicit_pass(
     iterations: usize,
     held: &[Hold],
     warm: bool,
+    reactions: &mut Vec<Vector>,
 ) {
     let mut x = Vec::new();
     let start: Option<Vec<Vector>> = warm.then(|| {
@@ -244,7 +253,7 @@ fn implicit_pass(
         h,
         iterations,
     };
-    body.state.elements.implicit_step(&input, &mut x);
+    body.state.elements.implicit_step(&input, &mut x, reactions);
     let x0 = &body.state.positions;
     for (i, v) in body.state.velocities.iter_mut().enumerate() {
         if !matches!(held[i], Hold::At(_)) {

@@ -7,7 +7,7 @@ use crate::dim::{
     CellKind, DeformableBuilder, DeformablePipeline, DeformableSet, ElementModel, Integrator,
     Material,
 };
-use crate::scenes::{BallScene, FallScene, Subject};
+use crate::scenes::{BallScene, CrushScene, FallScene, LimbScene, Subject};
 
 const IMPLICIT: Integrator = Integrator::Implicit { iterations: 10 };
 
@@ -160,4 +160,40 @@ fn a_stiff_silicone_ball_lands_and_rests_at_60_hz_without_inverted_cells() {
     let rest = r.rest_com.unwrap();
     assert!((rest - 0.1).abs() < 0.01, "{name} ends at {rest} m");
     assert!(r.substeps <= 1.0, "{name}");
+}
+
+#[test]
+fn the_limb_bends_to_110_degrees_and_1000_kg_crushes_the_cube_at_60_hz_without_inverted_cells() {
+    let implicit = Integrator::Implicit { iterations: 2 };
+    let limb = LimbScene {
+        dt: 1.0 / 60.0,
+        integrator: implicit,
+        ..Default::default()
+    }
+    .run()
+    .unwrap();
+    assert_eq!(limb.max_inverted_elements, 0);
+    assert!(
+        limb.max_anchor_error.unwrap() < 1e-5,
+        "{:?}",
+        limb.max_anchor_error
+    );
+    assert!(limb.substeps <= 1.0);
+    // A 1000 kg box on a 1 kg cube: the held nodes pass the cube's elastic force on to the box
+    // (without it the box sank through the cube, inverting 145 cells).
+    let crush = CrushScene {
+        cube: FallScene {
+            dt: 1.0 / 60.0,
+            integrator: implicit,
+            ..Default::default()
+        },
+        mass: 1000.0,
+        ..Default::default()
+    }
+    .run()
+    .unwrap();
+    assert!(!crush.failed, "{:?}", crush.failure);
+    assert_eq!(crush.max_inverted_elements, 0);
+    assert!(crush.max_penetration.unwrap() < 1e-3);
+    assert!(crush.shape_error.unwrap() < 0.01, "{:?}", crush.shape_error);
 }

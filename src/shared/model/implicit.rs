@@ -282,7 +282,18 @@ impl ModelState {
 
     /// One backward-Euler step (see the module docs): the end positions into `x`. Does
     /// nothing (and returns `false`) for a model without one.
-    pub fn implicit_step(&mut self, input: &StepInput<'_>, x: &mut Vec<Vector>) -> bool {
+    ///
+    /// `reactions` gets, per node, the force its hold exerted on it over the step (zero for a
+    /// free node): `m (x − y)/h² − f_el`, what balances inertia and the elastic force, with `y`
+    /// the node's own inertial prediction. A contact's impulse on a rigid body is its opposite
+    /// times `h`: a node held by a collider passes on the body's elastic force, which its
+    /// velocity change alone (a fraction `m/(k h²)` of it) would not.
+    pub fn implicit_step(
+        &mut self,
+        input: &StepInput<'_>,
+        x: &mut Vec<Vector>,
+        reactions: &mut Vec<Vector>,
+    ) -> bool {
         let n = input.x0.len();
         let ModelState {
             elements,
@@ -349,6 +360,15 @@ impl ModelState {
             Elements::CentroidSprings(_) => return false,
         }
         sweep(&mut vertex, input, &held, &y, x);
+        reactions.clear();
+        reactions.extend((0..n).map(|i| {
+            if held[i] == Hold::Free {
+                return Vector::ZERO;
+            }
+            let inertia = input.masses[i] / (h * h);
+            let inertial = x0[i] + v0[i] * h + input.gravity * (h * h);
+            -vertex.newton(i, x, inertia, inertial).0
+        }));
         if let Some(shape) = vertex.shape {
             let rotations = shape.rotations;
             if let Elements::ShapeMatching(sm) = elements {

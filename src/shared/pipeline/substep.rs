@@ -242,20 +242,74 @@ fn advance(
             let mut lift = vec![None; before.len()];
             for c in sc.last_contact.iter().flatten() {
                 if let Some(i) = c.node {
-                    lift[i as usize] = Some(c.normal);
+                    lift[i as usize] = Some((c.point, c.normal));
                 }
             }
             let after = AfterContacts {
                 before: &before,
                 lift: &lift,
             };
-            if integrator.after_contacts(body, g, at.h, after) {
+            let set = body.state.velocities.clone();
+            let mut reactions = Vec::new();
+            if integrator.after_contacts(body, g, at.h, after, &mut reactions) {
+                let given = Given {
+                    before: &before,
+                    set: &set,
+                    reactions: &reactions,
+                };
+                given.pass_on(body, at, sc, candidates, bodies);
                 timed(&mut m.times.contacts, || {
                     let backward = stats.substeps % 2 == 1;
                     node_contacts(body, at, backward, bodies, sc, candidates);
                     stats.facet_contacts +=
                         facet_contacts(body, at, backward, bodies, sc, candidates);
                 });
+            }
+        }
+    }
+}
+
+/// What an implicit step's holds gave the nodes the contacts stopped.
+struct Given<'a> {
+    /// Velocities before and after the contacts.
+    before: &'a [Vector],
+    set: &'a [Vector],
+    /// The force each hold exerted on its node over the substep.
+    reactions: &'a [Vector],
+}
+
+impl Given<'_> {
+    /// Gives each dynamic body the rest of its contacts' reactions: the push a node held
+    /// against it took over the substep (`reactions · h` along the normal), less the impulse
+    /// the contact already gave that node. A node stopped by a collider under the implicit
+    /// step passes on the body's elastic force; its own velocity change is a fraction
+    /// `m/(k h²)` of it (a 1000 kg box sank through a soft cube it pressed on).
+    fn pass_on(
+        &self,
+        body: &Deformable,
+        at: &Substep<'_>,
+        sc: &Scratch,
+        candidates: &Candidates<'_>,
+        bodies: &mut RigidBodySet,
+    ) {
+        if self.reactions.is_empty() {
+            return;
+        }
+        for c in sc.last_contact.iter().flatten() {
+            let Some(i) = c.node.map(|i| i as usize) else {
+                continue;
+            };
+            let Some(cand) = candidates.iter().find(|k| k.handle == c.collider) else {
+                continue;
+            };
+            if !cand.dynamic {
+                continue;
+            }
+            let given = (self.set[i] - self.before[i]) * body.rest.masses[i];
+            let rest = c.normal.dot(self.reactions[i] * at.h - given);
+            if rest > 0.0 {
+                let anchor = cand.anchor(c.point);
+                cand.apply_impulse(-c.normal * rest, anchor, at.motions, bodies, false, at.dt);
             }
         }
     }

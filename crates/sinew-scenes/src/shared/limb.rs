@@ -7,6 +7,7 @@ use super::super::lib::rapier::dynamics::{RigidBodyBuilder, RigidBodyHandle};
 use super::super::lib::rapier::geometry::ColliderBuilder;
 use super::super::lib::BuildError;
 use super::super::lib::DeformableWorld;
+use super::super::lib::Integrator;
 use super::super::lib::Material;
 use super::fall::cuboid;
 use super::metrics::self_interpenetration;
@@ -52,6 +53,8 @@ pub struct LimbScene {
     /// Whether sinew's tissue has self contact on (the crease above the hinge folds onto
     /// itself).
     pub self_contact: bool,
+    /// sinew's integrator.
+    pub integrator: Integrator,
 }
 
 impl Default for LimbScene {
@@ -71,6 +74,7 @@ impl Default for LimbScene {
             fixed_substeps: None,
             stop_at_first_inversion: false,
             self_contact: false,
+            integrator: Integrator::Explicit,
         }
     }
 }
@@ -87,6 +91,7 @@ impl LimbScene {
     pub fn sim(&self) -> Result<(Sim, RigidBodyHandle), BuildError> {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
+        world.pipeline.settings.integrator = self.integrator;
         world.physics.gravity = Vector::ZERO;
         let mut half = Vector::splat(0.3);
         half[0] = 1.0;
