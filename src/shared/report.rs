@@ -64,6 +64,9 @@ pub struct DeformableReport {
     pub exploded: bool,
     /// Whether the body is frozen (not simulated).
     pub frozen: bool,
+    /// Whether bones it is bound to jumped this step and the body was carried along with them
+    /// rigidly ([`PipelineSettings::teleport_speed`](super::PipelineSettings::teleport_speed)).
+    pub teleported: bool,
     /// Whether the body is asleep (not simulated this step; see
     /// [`Deformable::is_sleeping`](super::Deformable::is_sleeping)). The other fields keep
     /// the values of its last simulated step, but `substeps` and the times, which are zero.

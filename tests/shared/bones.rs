@@ -231,3 +231,98 @@ fn limb_springs_collapse_and_edge_repulsion_holds() {
     let strayed = er.max_anchor_error.expect("the limb measures anchors");
     assert!(strayed < 1e-4, "bound nodes strayed {strayed}");
 }
+
+/// A 0.5 m cube hanging from a kinematic bone by its top nodes at 60 Hz, settled for a second;
+/// then the bone is sent `jump` m sideways and turned a quarter in one step. Per step after:
+/// substeps, frozen, teleported, inverted cells; and how far the cube's centre of mass is,
+/// after the jump's step, from where the bone's motion takes it.
+fn hang_and_jump(
+    model: ElementModel,
+    integrator: crate::dim::Integrator,
+    jump: Real,
+) -> (Vec<(usize, bool, bool, usize)>, usize, Real) {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    world.pipeline.settings.integrator = integrator;
+    let bone = world
+        .physics
+        .insert_body(RigidBodyBuilder::kinematic_position_based().translation(UP));
+    let t = DeformableBuilder::cuboid(Vector::splat(0.25), [5; DIM])
+        .model(model)
+        .material(Material {
+            density: 1000.0,
+            young_modulus: 1e4,
+            damping_ratio: 0.1,
+            ..Default::default()
+        })
+        .translation(UP * 0.75)
+        .build()
+        .unwrap();
+    let h = world.insert(t);
+    let top: Vec<u32> = (0..world.deformables[h].num_nodes() as u32)
+        .filter(|&i| world.deformables[h].positions()[i as usize].dot(UP) > 0.99)
+        .collect();
+    world.attach_nodes(h, bone, &top).unwrap();
+    for _ in 0..60 {
+        world.step();
+    }
+    let resting = world.pipeline.report().get(h).unwrap().substeps;
+    let offset = world.deformables[h].center_of_mass() - world.physics.bodies[bone].translation();
+    let b = &mut world.physics.bodies[bone];
+    let mut to = *b.position();
+    to.translation += Vector::X * jump;
+    to.rotation =
+        math::rotation_from_angle(math::cross(Vector::X, UP) * std::f32::consts::FRAC_PI_2);
+    b.set_next_kinematic_position(to);
+    let mut after = Vec::new();
+    let mut error = 0.0;
+    for k in 0..10 {
+        world.step();
+        let r = world.pipeline.report().get(h).unwrap();
+        after.push((r.substeps, r.frozen, r.teleported, r.inverted_elements));
+        if k == 0 {
+            let b = &world.physics.bodies[bone];
+            let expected = b.translation() + *b.rotation() * offset;
+            error = world.deformables[h].center_of_mass().distance(expected);
+        }
+    }
+    (after, resting, error)
+}
+
+#[test]
+fn a_bone_that_jumps_carries_its_body_along_under_either_integrator() {
+    // Sent 1 m and 10 m and turned a quarter in one 60 Hz step, the bone takes the body with
+    // it: the next steps cost what resting did (10 m once kept the explicit step at its 19 999
+    // substep cap with cells inverted), and the report says so on the jump's step.
+    for integrator in [
+        crate::dim::Integrator::Explicit,
+        crate::dim::Integrator::Implicit { iterations: 2 },
+    ] {
+        for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
+            for jump in [1.0, 10.0] {
+                let (after, resting, error) = hang_and_jump(model, integrator, jump);
+                let what = format!("{} {integrator:?} {jump} m: {after:?}", model.name());
+                assert!(after[0].2 && after[1..].iter().all(|a| !a.2), "{what}");
+                assert!(after.iter().all(|a| !a.1 && a.3 == 0), "{what}");
+                assert!(after.iter().all(|a| a.0 <= 2 * resting.max(1)), "{what}");
+                assert!(
+                    error < 0.02,
+                    "{what}: centre of mass {error} m off the bone's"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_fast_but_possible_bone_motion_is_no_jump() {
+    // 0.5 m in a 60 Hz step is 30 m/s, under the 50 m/s of a jump: the body is dragged, not
+    // carried (its centre of mass lags the bone by centimetres).
+    let (after, _, error) = hang_and_jump(
+        ElementModel::EdgeRepulsion,
+        crate::dim::Integrator::Explicit,
+        0.5,
+    );
+    assert!(after.iter().all(|a| !a.2), "{after:?}");
+    assert!(error > 0.05, "{error}");
+}

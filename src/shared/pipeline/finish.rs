@@ -39,6 +39,7 @@ pub(super) fn diagnose(
     let quality = quality.unwrap_or_else(|| Quality::of(body, Real::INFINITY));
     let r = &mut body.last.report;
     r.frozen = body.activation.frozen;
+    r.teleported = sc.teleported;
     r.substeps = stats.substeps;
     r.limiter_substeps = stats.limiter_substeps;
     r.substep_cap_hit = stats.cap_hit;

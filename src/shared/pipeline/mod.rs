@@ -38,6 +38,7 @@ mod finish;
 mod prepare;
 mod sleep;
 mod substep;
+mod teleport;
 
 use substep::{Member, SubstepStats};
 
@@ -85,6 +86,17 @@ pub struct PipelineSettings {
     /// How the bodies' velocities advance (default [`Integrator::Explicit`]).
     #[cfg_attr(feature = "serde", serde(default))]
     pub integrator: Integrator,
+    /// A fixed or kinematic bone that would drag a bound node faster than this (m/s) jumped (a
+    /// teleport, a respawn, a kinematic target set far away): its body is carried along
+    /// rigidly instead of stretched after it ([`DeformableReport::teleported`](super::DeformableReport::teleported);
+    /// default 50 m/s, 0.8 m in a 60 Hz step; infinite turns it off).
+    #[cfg_attr(feature = "serde", serde(default = "default_teleport_speed"))]
+    pub teleport_speed: Real,
+}
+
+#[cfg(feature = "serde")]
+fn default_teleport_speed() -> Real {
+    PipelineSettings::default().teleport_speed
 }
 
 impl Default for PipelineSettings {
@@ -98,6 +110,7 @@ impl Default for PipelineSettings {
             sleep_speed: 0.05,
             time_until_sleep: 0.5,
             integrator: Integrator::Explicit,
+            teleport_speed: 50.0,
         }
     }
 }
@@ -169,6 +182,8 @@ struct Scratch {
     held: Vec<RigidBodyHandle>,
     /// How far off two-sided surfaces this body's nodes are kept.
     skin: Real,
+    /// Whether the body was carried along with bones that jumped this step.
+    teleported: bool,
     /// Its surface as the other members of its group meet it this step.
     soft_surface: SoftSurface,
     /// Per surface node (CSR): the other members' facets near it, `(member, facet)`.

@@ -52,6 +52,7 @@ pub(super) fn prepare<'a>(
         let m = motion_of(&mut sc.motions, a.body, bodies, dt);
         sc.attachment_motion.push(m);
     }
+    sc.teleported = super::teleport::carry_if_jumped(body, ctx, bodies, sc);
 
     // Broad phase, once per deformable and then once per surface node.
     let surface = body.rest.mesh.boundary_nodes();
