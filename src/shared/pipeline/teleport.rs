@@ -46,7 +46,7 @@ pub(super) fn carry_if_jumped(
         .iter()
         .map(|(from, to)| from.distance(*to))
         .fold(0.0, Real::max);
-    if pairs.is_empty() || !(jump > reach) {
+    if pairs.is_empty() || jump <= reach {
         return false;
     }
     let (rotation, from, to) = rigid_fit(&pairs);
