@@ -232,6 +232,9 @@ fn limb_springs_collapse_and_edge_repulsion_holds() {
     assert!(strayed < 1e-4, "bound nodes strayed {strayed}");
 }
 
+/// One step after a jump: substeps, frozen, teleported, inverted cells.
+type AfterJump = (usize, bool, bool, usize);
+
 /// A 0.5 m cube hanging from a kinematic bone by its top nodes at 60 Hz, settled for a second;
 /// then the bone is sent `jump` m sideways and turned a quarter in one step. Per step after:
 /// substeps, frozen, teleported, inverted cells; and how far the cube's centre of mass is,
@@ -240,7 +243,7 @@ fn hang_and_jump(
     model: ElementModel,
     integrator: crate::dim::Integrator,
     jump: Real,
-) -> (Vec<(usize, bool, bool, usize)>, usize, Real) {
+) -> (Vec<AfterJump>, usize, Real) {
     let mut world = DeformableWorld::new();
     world.set_dt(1.0 / 60.0);
     world.pipeline.settings.integrator = integrator;
