@@ -52,6 +52,7 @@ const KEYS: &[(&str, &str)] = &[
     ("energy_gain", "f?"),
     ("final_speed", "f?"),
     ("pairs_wall_s", "f?"),
+    ("measured_poisson", "f?"),
     ("sag", "f?"),
     ("sag_theory", "f?"),
     ("sag_error", "f?"),
@@ -356,4 +357,23 @@ fn bad_arguments_are_errors_not_panics() {
     let e = cli::run(["scenes", "explode"], &mut out).unwrap_err();
     assert!(e.contains("explode"), "{e}");
     assert!(out.is_empty());
+}
+
+#[test]
+fn the_stretch_scene_measures_poisson_s_ratio() {
+    let lines = run(&[
+        "stretch",
+        "--dim",
+        "2",
+        "--model",
+        "edge-repulsion",
+        "--poisson",
+        "0.45",
+        "--res",
+        "3",
+    ]);
+    let nu = lines[0]["measured_poisson"].as_f64().unwrap();
+    // A coarse bar (two cells across): the surface softens it, but it contracts far more than
+    // the lattice's own 0.2.
+    assert!(nu > 0.35 && nu < 0.5, "{nu}");
 }

@@ -18,6 +18,8 @@ pub enum Scene {
     Fall,
     /// A 10 cm silicone ball (E = 1 MPa, 2 cm cells) dropped on the ground at 60 Hz.
     Ball,
+    /// A bar stretched 2 %: Poisson's ratio measured (`--poisson` asks for one).
+    Stretch,
     /// Cooper & Maddock's limb, bent to 110°.
     Limb,
     /// A heavy box crushing a soft cube, then lifted away.
@@ -263,6 +265,7 @@ pub fn to_json(r: &Record) -> Value {
         "energy_gain": r.energy_gain,
         "final_speed": r.final_speed,
         "pairs_wall_s": r.pairs_wall_s,
+        "measured_poisson": r.measured_poisson,
     });
     if let (Some(all), Value::Object(more)) = (object.as_object_mut(), contact) {
         all.extend(more);
@@ -278,6 +281,7 @@ fn table_header(scene: Scene) -> String {
     let extra = match scene {
         Scene::Fall => "  apex m  rest m   pen mm",
         Scene::Ball => "  apex m  rest m   pen mm  ms/step",
+        Scene::Stretch => "  ν asked  ν measured",
         Scene::Limb => " failure°  anchor m  self mm",
         Scene::Crush => "    mass kg  pen mm  shape err  failure kg",
         Scene::Manipulator => "  rest m  shape err  failure strike",
@@ -310,6 +314,7 @@ fn table_row(scene: Scene, r: &Record) -> String {
             opt(r.max_penetration.map(|p| p * 1e3), 2),
             r.wall_per_sim_s() * r.dt * 1e3
         ),
+        Scene::Stretch => format!("  {:>7.3}  {:>10}", r.poisson, opt(r.measured_poisson, 3)),
         Scene::Limb => format!(
             " {:>9}  {:>8}  {:>7}",
             opt(r.first_failure, 1),
@@ -409,7 +414,7 @@ macro_rules! dimension_runner {
             use sinew_scenes::$dim::{
                 dt_sweep, BallScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
                 ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
-                StackScene, Subject, CRUSH_MASSES,
+                StackScene, StretchScene, Subject, CRUSH_MASSES,
             };
 
             fn fits(args: &Args) -> Result<Vec<RotationFit>, String> {
@@ -555,6 +560,21 @@ macro_rules! dimension_runner {
                         }
                         Scene::DtSweep => {
                             observed(args, name, |o| dt_sweep(&cube, o)).map_err(err)?
+                        }
+                        Scene::Stretch => {
+                            let d = StretchScene::default();
+                            let scene = StretchScene {
+                                subject,
+                                spacing: args
+                                    .res
+                                    .map_or(d.spacing, |n| 1.0 / (n.max(2) - 1) as Real),
+                                dt: args.dt.map_or(d.dt, |v| v as Real),
+                                young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
+                                poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                                integrator: cube.integrator,
+                                ..d
+                            };
+                            vec![scene.run().map_err(err)?]
                         }
                         Scene::Ball => {
                             let d = BallScene::default();

@@ -23,6 +23,7 @@ mod mesh;
 mod metrics;
 mod parallel;
 mod pipeline;
+mod poisson;
 mod properties;
 mod query;
 mod scenes;

@@ -131,6 +131,8 @@ pub struct Record {
     /// Range (max − min) of the tip sag over the cantilever's settling window, over the sag: how
     /// far from static the measurement is.
     pub sag_wobble: Option<f64>,
+    /// `stretch`: Poisson's ratio measured, `−ε_lateral / ε_axial` in the bar's middle.
+    pub measured_poisson: Option<f64>,
     /// Kinetic energy at the end, J.
     pub final_kinetic_energy: f64,
     /// Whether the state turned non-finite.

@@ -53,6 +53,7 @@ use super::edge_repulsion::{EdgeRepulsion, MIN_HEIGHT_RATIO, OPPOSITE};
 use super::hessian;
 use super::shape_matching::ShapeMatching;
 use super::springs::{Law, Springs};
+use super::volume::Volume;
 use super::{Elements, ModelState};
 
 /// Smallest height a line-searched step may leave a vertex at, over its rest height.
@@ -77,10 +78,11 @@ pub(crate) struct Incidence {
 impl Incidence {
     /// The incidence of `elements` over `nodes` nodes (`None` for a model without an implicit
     /// step).
-    fn of(elements: &Elements, nodes: usize) -> Option<Self> {
+    fn of(elements: &Elements, volume: Option<&Volume>, nodes: usize) -> Option<Self> {
         Some(match elements {
             Elements::Springs(s) | Elements::NonlinearSprings(s) => {
-                Self::build(nodes, Some(s), None, None)
+                let cells = volume.map(|v| (v.cells(), SIMPLEX_ARITY));
+                Self::build(nodes, Some(s), cells, None)
             }
             Elements::EdgeRepulsion(e) => Self::build(
                 nodes,
@@ -298,10 +300,12 @@ impl ModelState {
         let ModelState {
             elements,
             incidence,
+            volume,
             ..
         } = self;
+        let volume = volume.as_ref();
         let Some(incidence) = incidence
-            .get_or_init(|| Incidence::of(elements, n))
+            .get_or_init(|| Incidence::of(elements, volume, n))
             .as_ref()
         else {
             return false;
@@ -324,6 +328,7 @@ impl ModelState {
             springs: None,
             er: None,
             shape: None,
+            volume,
             incidence,
             x0,
             h,
@@ -493,6 +498,8 @@ struct Vertex<'a> {
     springs: Option<&'a Springs>,
     er: Option<&'a EdgeRepulsion>,
     shape: Option<Shape<'a>>,
+    /// The volumetric term (on the same cells as the incidence's).
+    volume: Option<&'a Volume>,
     incidence: &'a Incidence,
     x0: &'a [Vector],
     h: Real,
@@ -509,6 +516,13 @@ impl Vertex<'_> {
         if let Some(er) = self.er {
             for &(cell, a) in self.incidence.cells_of(i) {
                 let (df, db) = repulsion_terms(er, self.incidence, cell as usize, a as usize, x);
+                f += df;
+                block += db;
+            }
+        }
+        if let Some(volume) = self.volume {
+            for &(cell, a) in self.incidence.cells_of(i) {
+                let (df, db) = volume.vertex_terms(cell as usize, a as usize, x);
                 f += df;
                 block += db;
             }
@@ -722,7 +736,7 @@ mod tests {
                 q
             })
             .collect();
-        let incidence = Incidence::of(&body.state.elements.elements, x.len()).unwrap();
+        let incidence = Incidence::of(&body.state.elements.elements, None, x.len()).unwrap();
         let mut loaded = 0;
         for cell in 0..er.cells.len() / SIMPLEX_ARITY {
             let ids = &er.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];

@@ -60,11 +60,12 @@ pub mod shape_matching;
 pub mod springs;
 #[cfg(all(test, feature = "parallel"))]
 mod tests;
+pub mod volume;
 
 pub(crate) use implicit::{Hold, StepInput};
 
 use super::error::BuildError;
-use super::material::Resolved;
+use super::material::{Resolved, Stiffness};
 use super::math::{Real, Rotation, Vector};
 use super::mesh::{CellKind, Mesh};
 
@@ -230,6 +231,8 @@ pub(crate) enum Elements {
 pub(crate) struct ModelState {
     elements: Elements,
     bounds: NodeBounds,
+    /// The volumetric term that sets Poisson's ratio, if the model takes one.
+    volume: Option<volume::Volume>,
     /// Which terms touch each node, for the implicit step (made when first needed).
     incidence: std::sync::OnceLock<Option<implicit::Incidence>>,
     #[cfg(feature = "parallel")]
@@ -244,6 +247,18 @@ impl ModelState {
         params: &Resolved,
         initial_rotation: Rotation,
     ) -> Result<Self, BuildError> {
+        // Poisson's ratio: the model's own terms scaled by σ, plus a volumetric term.
+        let poisson = match (params.stiffness, lattice_poisson(model, mesh.kind())) {
+            (Stiffness::FromMaterial, Some(lattice)) => {
+                Some(volume::mapping(lattice, params.material.poisson_ratio))
+            }
+            _ => None,
+        };
+        let mut scaled = *params;
+        if let Some((sigma, _)) = poisson {
+            scaled.material.young_modulus *= sigma;
+        }
+        let params = &scaled;
         let elements = match model {
             ElementModel::Springs => Elements::Springs(springs::Springs::build(
                 mesh,
@@ -290,7 +305,14 @@ impl ModelState {
         };
         let mut bounds = NodeBounds::new(mesh.nodes().len());
         elements.constant_bounds(&mut bounds);
+        let young = params.material.young_modulus;
+        let volume = poisson
+            .filter(|(sigma, kappa)| kappa.abs() * young > 1e-6 * sigma * young)
+            .map(|(sigma, kappa)| {
+                volume::Volume::build(mesh.cell_indices(), mesh.nodes(), kappa * young / sigma)
+            });
         Ok(ModelState {
+            volume,
             #[cfg(feature = "parallel")]
             split: parallel::Split::build_if_large(&elements, mesh),
             elements,
@@ -302,6 +324,14 @@ impl ModelState {
     /// Adds element forces at `(x, v)` into `acc`; returns the largest substep the model's
     /// own limiter allows (infinite when it has none).
     pub fn accumulate(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
+        let limit = self.accumulate_elements(x, v, acc);
+        if let Some(volume) = &self.volume {
+            volume.accumulate(x, acc);
+        }
+        limit
+    }
+
+    fn accumulate_elements(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
         #[cfg(feature = "parallel")]
         if let Some(split) = &mut self.split {
             if rayon::current_num_threads() > 1 {
@@ -361,12 +391,34 @@ impl ModelState {
 
     /// Elastic (stored) energy at `x`.
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
-        match &self.elements {
-            Elements::Springs(s) | Elements::NonlinearSprings(s) => s.elastic_energy(x),
-            Elements::CentroidSprings(s) => s.elastic_energy(x),
-            Elements::EdgeRepulsion(s) => s.elastic_energy(x),
-            Elements::ShapeMatching(s) => s.elastic_energy(x),
+        let volume = self.volume.as_ref().map_or(0.0, |v| v.elastic_energy(x));
+        volume
+            + match &self.elements {
+                Elements::Springs(s) | Elements::NonlinearSprings(s) => s.elastic_energy(x),
+                Elements::CentroidSprings(s) => s.elastic_energy(x),
+                Elements::EdgeRepulsion(s) => s.elastic_energy(x),
+                Elements::ShapeMatching(s) => s.elastic_energy(x),
+            }
+    }
+}
+
+/// The Poisson's ratio of a model's lattice (`Mesh::cuboid`'s mirrored Kuhn simplices, small
+/// strain along an axis, Cauchy–Born: each model's docs), for the models that take Poisson's
+/// ratio from their material: springs and nonlinear springs `5/31` (3D), `1/5` (2D); edge
+/// repulsion `7/47`, `1/5`; shape matching `0.125` (measured: `tests/shared/poisson.rs`), `1/7`;
+/// on simplex cells only.
+pub fn lattice_poisson(model: ElementModel, kind: CellKind) -> Option<Real> {
+    if kind != CellKind::Simplex {
+        return None;
+    }
+    let three = super::math::DIM == 3;
+    match model {
+        ElementModel::Springs | ElementModel::NonlinearSprings => {
+            Some(if three { 5.0 / 31.0 } else { 0.2 })
         }
+        ElementModel::EdgeRepulsion => Some(if three { 7.0 / 47.0 } else { 0.2 }),
+        ElementModel::ShapeMatching { .. } => Some(if three { 0.125 } else { 1.0 / 7.0 }),
+        ElementModel::CentroidSprings => None,
     }
 }
 

@@ -30,6 +30,7 @@ mod manipulator;
 pub mod metrics;
 mod rotation_error;
 mod sim;
+mod stretch;
 mod subject;
 pub mod testing;
 
@@ -45,4 +46,5 @@ pub use limb::LimbScene;
 pub use manipulator::ManipulatorScene;
 pub use rotation_error::{spurious_acceleration, RotationErrorScene};
 pub use sim::{Sim, RAPIER_SKIN};
+pub use stretch::StretchScene;
 pub use subject::{RapierModel, Subject};

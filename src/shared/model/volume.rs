@@ -1,0 +1,178 @@
+//! The volumetric term that gives a model the Poisson's ratio asked for (issue 15).
+//!
+//! Each simplex cell stores `κ V0/2 (J − 1)²`, `J = D/D0` its volume over its rest volume
+//! (`D` as in [`math::simplex_gradients`]): force `−κ V0 (J − 1) g_a / D0` on vertex `a`.
+//! Under a small uniform strain it adds `κ` to `C11` and `C12` of the lattice and nothing to its
+//! shear, so together with a scale `σ` of the model's own terms it sets both Young's modulus and
+//! Poisson's ratio along a lattice axis ([`mapping`]). `κ` is negative when the ratio asked is
+//! below the lattice's own; the sum stays positive definite for any `ν > −1` (the bulk modulus
+//! is that of the material asked), but the term alone is not, so the implicit step leaves its
+//! block out then (its gradient is exact either way).
+
+use super::super::math::{self, Matrix, Real, Vector, DIM, DIM_FACTORIAL, SIMPLEX_ARITY};
+use super::Accumulator;
+
+/// The scale `σ` of a model's own terms and the volumetric modulus `κ` (over `E`) that give a
+/// lattice of Poisson's ratio `lattice` (and Young's modulus `E` along its axes) the ratio
+/// `nu`, keeping `E`.
+///
+/// Along an axis of a cubic lattice, `E = (C11 − C12)(C11 + (DIM−1) C12)/(C11 + (DIM−2) C12)`
+/// and `ν = C12/(C11 + (DIM−2) C12)`; `C11 − C12 = E/(1 + ν)` in both dimensions, so
+/// `σ = (1 + ν_lattice)/(1 + ν)` keeps the shear and `κ = C12(ν) − σ C12(ν_lattice)`, with
+/// `C12 = E ν/((1 + ν)(1 − 2ν))` in 3D and `E ν/(1 − ν²)` in 2D.
+pub fn mapping(lattice: Real, nu: Real) -> (Real, Real) {
+    let sigma = (1.0 + lattice) / (1.0 + nu);
+    let c12 = |n: Real| {
+        if DIM == 3 {
+            n / ((1.0 + n) * (1.0 - 2.0 * n))
+        } else {
+            n / (1.0 - n * n)
+        }
+    };
+    (sigma, c12(nu) - sigma * c12(lattice))
+}
+
+/// Volumetric terms on simplex cells.
+#[derive(Clone, Debug)]
+pub(crate) struct Volume {
+    cells: Vec<u32>,
+    /// Per cell: rest `D`, and `κ V0`.
+    d0: Vec<Real>,
+    k: Vec<Real>,
+}
+
+impl Volume {
+    /// Terms of modulus `kappa` (Pa) on the simplex cells `cells` at rest positions `nodes`.
+    pub fn build(cells: &[u32], nodes: &[Vector], kappa: Real) -> Self {
+        let mut out = Volume {
+            cells: cells.to_vec(),
+            d0: Vec::new(),
+            k: Vec::new(),
+        };
+        for ids in cells.chunks_exact(SIMPLEX_ARITY) {
+            let p: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| nodes[ids[a] as usize]);
+            let (d0, _) = math::simplex_gradients(&p);
+            out.d0.push(d0);
+            out.k.push(kappa * d0.abs() / DIM_FACTORIAL);
+        }
+        out
+    }
+
+    /// The cells' vertex indices.
+    pub fn cells(&self) -> &[u32] {
+        &self.cells
+    }
+
+    /// Cell `cell` at `x`: `J − 1`, the gradients of `D`, and `κ V0 / D0`.
+    #[inline]
+    fn at(&self, cell: usize, x: &[Vector]) -> (Real, [Vector; SIMPLEX_ARITY], Real) {
+        let ids = &self.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
+        let p: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
+        let (d, g) = math::simplex_gradients(&p);
+        let d0 = self.d0[cell];
+        (d / d0 - 1.0, g, self.k[cell] / d0)
+    }
+
+    /// Adds the forces and their stiffness bounds (`|κ| V0 |g_a| Σ_b |g_b| / D0²`, the
+    /// Gershgorin row of `κ V0 ∇J ∇Jᵀ`).
+    pub fn accumulate(&self, x: &[Vector], acc: &mut Accumulator) {
+        for cell in 0..self.d0.len() {
+            let (strain, g, k) = self.at(cell, x);
+            let ids = &self.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
+            let sum: Real = g.iter().map(|g| g.length()).sum();
+            let row = (k / self.d0[cell]).abs() * sum;
+            for (a, &i) in ids.iter().enumerate() {
+                acc.force[i as usize] -= g[a] * (k * strain);
+                acc.stiffness[i as usize] += row * g[a].length();
+            }
+        }
+    }
+
+    /// Vertex `a` of `cell`: `−∂E/∂x_a` and its Gauss–Newton block `κ V0 ∇_a J ∇_a Jᵀ` (left
+    /// out for a negative `κ`).
+    #[inline]
+    pub fn vertex_terms(&self, cell: usize, a: usize, x: &[Vector]) -> (Vector, Matrix) {
+        let (strain, g, k) = self.at(cell, x);
+        let block = if k * self.d0[cell] > 0.0 {
+            math::outer(g[a], g[a]) * (k / self.d0[cell])
+        } else {
+            Matrix::ZERO
+        };
+        (-g[a] * (k * strain), block)
+    }
+
+    pub fn elastic_energy(&self, x: &[Vector]) -> Real {
+        (0..self.d0.len())
+            .map(|cell| {
+                let (strain, _, k) = self.at(cell, x);
+                0.5 * k * self.d0[cell] * strain * strain
+            })
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_mapping_keeps_the_lattice_as_it_is_and_gives_any_ratio_its_moduli() {
+        let (s, k) = mapping(0.2, 0.2);
+        assert!((s - 1.0).abs() < 1e-6 && k.abs() < 1e-6);
+        // C11 and C12 of the scaled lattice plus κ are the isotropic material's.
+        let c = |n: Real| {
+            let c12 = if DIM == 3 {
+                n / ((1.0 + n) * (1.0 - 2.0 * n))
+            } else {
+                n / (1.0 - n * n)
+            };
+            (c12 + 1.0 / (1.0 + n), c12)
+        };
+        for (lattice, nu) in [(0.15, 0.0), (0.15, 0.3), (0.2, 0.45), (1.0 / 7.0, 0.49)] {
+            let (s, k) = mapping(lattice, nu);
+            let ((a11, a12), (b11, b12)) = (c(lattice), c(nu));
+            assert!((s * a11 + k - b11).abs() < 1e-4 * b11, "{lattice} {nu}");
+            assert!((s * a12 + k - b12).abs() < 1e-4 * b11, "{lattice} {nu}");
+        }
+    }
+
+    #[test]
+    fn forces_are_the_energys_gradient_and_the_block_its_hessian_at_rest() {
+        let mut nodes: Vec<Vector> = (0..SIMPLEX_ARITY)
+            .map(|a| {
+                let mut p = Vector::ZERO;
+                if a > 0 {
+                    p[a - 1] = 1.0;
+                }
+                p
+            })
+            .collect();
+        let cells: Vec<u32> = (0..SIMPLEX_ARITY as u32).collect();
+        let v = Volume::build(&cells, &nodes, 3.0);
+        nodes[1] += Vector::splat(0.1);
+        let eps = 1e-2;
+        for a in 0..SIMPLEX_ARITY {
+            let (f, _) = v.vertex_terms(0, a, &nodes);
+            for d in 0..DIM {
+                let mut plus = nodes.clone();
+                let mut minus = nodes.clone();
+                plus[a][d] += eps;
+                minus[a][d] -= eps;
+                let fd = (v.elastic_energy(&plus) - v.elastic_energy(&minus)) / (2.0 * eps);
+                assert!((fd + f[d]).abs() < 1e-2 * f.length().max(1e-2), "{a} {d}");
+            }
+        }
+        // At rest the Gauss–Newton block is the exact Hessian.
+        let rest = Volume::build(&cells, &nodes, 3.0);
+        let (_, block) = rest.vertex_terms(0, 2, &nodes);
+        for d in 0..DIM {
+            let mut plus = nodes.clone();
+            let mut minus = nodes.clone();
+            plus[2][d] += eps;
+            minus[2][d] -= eps;
+            let col = (rest.vertex_terms(0, 2, &minus).0 - rest.vertex_terms(0, 2, &plus).0)
+                / (2.0 * eps);
+            assert!((col - block.col(d)).length() < 1e-2 * block.col(d).length().max(1e-3));
+        }
+    }
+}
