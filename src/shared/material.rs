@@ -11,11 +11,17 @@ use super::math::Real;
 /// calibration constant `s`, and damping `c = 2 ζ √(k m)` with `m` the mass that term moves,
 /// so the damping ratio is the same for every element whatever the resolution.
 ///
-/// The spring-like models cannot set Poisson's ratio independently of Young's modulus: on the
-/// lattice of `Mesh::cuboid` their effective ratio is fixed by the lattice (springs 5/31 ≈ 0.16
-/// in 3D, 0.2 in 2D; edge repulsion 7/47 ≈ 0.15 in 3D, 0.2 in 2D); `poisson_ratio` is kept for
-/// peers that can use it and for reports. Each model's `s` is derived so that the lattice's
-/// Young's modulus along an axis is `E`; the `cantilever` scene checks it against beam theory.
+/// Poisson's ratio: each spring-like lattice has its own (springs and nonlinear springs 5/31 ≈
+/// 0.16 in 3D, 0.2 in 2D; edge repulsion 7/47 ≈ 0.15, 0.2; shape matching ≈ 0.125, 1/7). On
+/// simplex cells, springs, nonlinear springs, edge repulsion and shape matching take the one
+/// asked for: their terms are scaled and each cell gets a volumetric term
+/// ([`super::model::volume`]), so that along a lattice axis the body has this `E` and this `ν`
+/// (an affine stretch shows it within 0.01; a bar's free surface adds a bias that shrinks with
+/// resolution: `scenes stretch`). Centroid springs and cube cells keep their lattice's ratio.
+/// Each model's `s` is derived so that the lattice's Young's modulus along an axis is `E`; the
+/// `cantilever` scene checks it against beam theory. Towards `ν = 0.5` the volumetric term
+/// stiffens the body: the explicit step takes more substeps (5 → 7 at ν = 0.3 → 0.45 for the
+/// default jelly), the implicit step does not.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Material {

@@ -514,13 +514,22 @@ impl Vertex<'_> {
             self.add_springs(s, i, x, &mut f, &mut block);
         }
         if let Some(er) = self.er {
+            // One evaluation of each cell's volume gradients serves its repulsions and its
+            // volumetric term.
             for &(cell, a) in self.incidence.cells_of(i) {
-                let (df, db) = repulsion_terms(er, self.incidence, cell as usize, a as usize, x);
+                let (cell, a) = (cell as usize, a as usize);
+                let (d, g) = cell_geometry(er, self.incidence, cell, x);
+                let (df, db) = repulsion_terms(er, self.incidence, cell, a, (d, &g));
                 f += df;
                 block += db;
+                if let Some(volume) = self.volume {
+                    let raw = d * self.incidence.cell_sign[cell];
+                    let (df, db) = volume.vertex_terms_at(cell, a, raw, &g);
+                    f += df;
+                    block += db;
+                }
             }
-        }
-        if let Some(volume) = self.volume {
+        } else if let Some(volume) = self.volume {
             for &(cell, a) in self.incidence.cells_of(i) {
                 let (df, db) = volume.vertex_terms(cell as usize, a as usize, x);
                 f += df;
@@ -643,9 +652,8 @@ fn repulsion_terms(
     incidence: &Incidence,
     cell: usize,
     a: usize,
-    x: &[Vector],
+    (d, g): (Real, &[Vector; SIMPLEX_ARITY]),
 ) -> (Vector, Matrix) {
-    let (d, g) = cell_geometry(er, incidence, cell, x);
     let sign = incidence.cell_sign[cell];
     let mut f = Vector::ZERO;
     let mut block = Matrix::ZERO;
@@ -758,7 +766,8 @@ mod tests {
                         block += blocks[m + 1];
                     }
                 }
-                let (f2, block2) = repulsion_terms(er, &incidence, cell, a, &x);
+                let (d, g) = cell_geometry(er, &incidence, cell, &x);
+                let (f2, block2) = repulsion_terms(er, &incidence, cell, a, (d, &g));
                 let scale = f.length().max(1e-3);
                 assert!(
                     (f - f2).length() < 1e-3 * scale,

@@ -92,7 +92,23 @@ impl Volume {
     /// out for a negative `κ`).
     #[inline]
     pub fn vertex_terms(&self, cell: usize, a: usize, x: &[Vector]) -> (Vector, Matrix) {
-        let (strain, g, k) = self.at(cell, x);
+        let ids = &self.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
+        let p: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
+        let (d, g) = math::simplex_gradients(&p);
+        self.vertex_terms_at(cell, a, d, &g)
+    }
+
+    /// [`Volume::vertex_terms`] from the cell's `D` and its gradients, already evaluated.
+    #[inline]
+    pub fn vertex_terms_at(
+        &self,
+        cell: usize,
+        a: usize,
+        d: Real,
+        g: &[Vector; SIMPLEX_ARITY],
+    ) -> (Vector, Matrix) {
+        let d0 = self.d0[cell];
+        let (strain, k) = (d / d0 - 1.0, self.k[cell] / d0);
         let block = if k * self.d0[cell] > 0.0 {
             math::outer(g[a], g[a]) * (k / self.d0[cell])
         } else {
