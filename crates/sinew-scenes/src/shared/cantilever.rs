@@ -62,7 +62,7 @@ pub struct CantileverScene {
     pub thickness: Real,
     /// Young's modulus, Pa.
     pub young_modulus: Real,
-    /// Poisson's ratio (rapier's elastic models).
+    /// Poisson's ratio (sinew's models on simplex cells but centroid springs, and rapier's).
     pub poisson_ratio: Real,
     /// Density, kg/m³ (kg/m² in 2D).
     pub density: Real,

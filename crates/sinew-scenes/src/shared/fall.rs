@@ -33,7 +33,7 @@ pub struct FallScene {
     pub mass: Real,
     /// Young's modulus, Pa.
     pub young_modulus: Real,
-    /// Poisson's ratio (rapier's elastic models).
+    /// Poisson's ratio (sinew's models on simplex cells but centroid springs, and rapier's).
     pub poisson_ratio: Real,
     /// Damping ratio.
     pub damping_ratio: Real,
