@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 use clap::Parser;
 use plotters::prelude::*;
 use serde_json::json;
-use sinew::dim3::math::{Real, Vector};
-use sinew::dim3::{ElementModel, RotationFit, ShapeDamping};
+use sinew::dim3::math::Real;
+use sinew::dim3::{ElementModel, Integrator, RotationFit, ShapeDamping};
 use sinew_scenes::dim3::metrics::{trajectory_error, uniaxial_volume_change};
 use sinew_scenes::dim3::{CantileverScene, CrushScene, FallScene, RotationErrorScene, Subject};
 
@@ -136,31 +136,58 @@ fn fall(quick: bool) -> Vec<Point> {
         } else {
             (
                 &[3, 5, 7],
-                &[1.0e-3, 2.0e-3, 4.0e-3, 8.0e-3],
+                &[1.0e-3, 2.0e-3, 4.0e-3, 8.0e-3, 1.0 / 60.0, 1.0 / 30.0],
                 1.5,
                 9,
                 0.5e-3,
             )
         };
+    // The implicit step's points: game frame rates, a cheap and a converging sweep count.
+    let (implicit_dts, sweeps): (&[Real], &[usize]) = if quick {
+        (&[1.0 / 60.0], &[2])
+    } else {
+        (&[1.0 / 120.0, 1.0 / 60.0, 1.0 / 30.0], &[2, 10])
+    };
     let every: Real = 0.01;
     let mut out = Vec::new();
     for subject in Subject::all() {
-        let run = |res: usize, dt: Real| -> (sinew_scenes::record::Record, Vec<Vector>) {
+        let run = |res: usize, dt: Real, integrator: Integrator| {
             let scene = FallScene {
                 subject,
                 resolution: res,
                 dt,
                 seconds,
+                integrator,
                 ..FallScene::default()
             };
             scene.run_sampled(every).expect("the fall scene builds")
         };
         progress(&format!("fall {} reference", subject.name()));
-        let (reference_record, reference) = run(fine_res, fine_dt);
+        let (reference_record, reference) = run(fine_res, fine_dt, Integrator::Explicit);
+        // Explicit runs (rapier's bodies are their own), then the implicit step's.
+        let mut runs: Vec<(usize, Real, Integrator, String)> = Vec::new();
         for &res in resolutions {
             for &dt in dts {
-                progress(&format!("fall {} res {res} dt {dt}", subject.name()));
-                let (r, samples) = run(res, dt);
+                runs.push((res, dt, Integrator::Explicit, subject.name().to_string()));
+            }
+        }
+        if matches!(
+            subject,
+            Subject::Sinew(ElementModel::EdgeRepulsion | ElementModel::ShapeMatching { .. })
+        ) {
+            for &iterations in sweeps {
+                for &res in resolutions {
+                    for &dt in implicit_dts {
+                        let label = format!("{} implicit {iterations}", subject.name());
+                        runs.push((res, dt, Integrator::Implicit { iterations }, label));
+                    }
+                }
+            }
+        }
+        for (res, dt, integrator, label) in runs {
+            {
+                progress(&format!("fall {label} res {res} dt {dt}"));
+                let (r, samples) = run(res, dt, integrator);
                 let failed = r.failure.clone().or_else(|| {
                     reference_record
                         .failure
@@ -169,7 +196,7 @@ fn fall(quick: bool) -> Vec<Point> {
                 });
                 out.push(Point {
                     metric: FALL.key,
-                    model: subject.name().to_string(),
+                    model: label,
                     res,
                     dt: dt as f64,
                     cost: r.wall_per_sim_s(),
