@@ -101,7 +101,7 @@ pub struct Args {
     /// Strikes of the manipulator (default 20).
     #[arg(long)]
     pub strikes: Option<usize>,
-    /// sinew's integrator (fall, ball, limb, dt-sweep, crush, manipulator).
+    /// sinew's integrator (fall, ball, limb, stack, stretch, dt-sweep, crush, manipulator).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
     /// Gauss–Seidel sweeps per step of the implicit integrator (default 10). (`--iterations`
@@ -612,6 +612,7 @@ macro_rules! dimension_runner {
                             let d = StackScene::default();
                             let scene = StackScene {
                                 subject,
+                                integrator: cube.integrator,
                                 resolution: args.res.unwrap_or(d.resolution),
                                 dt: args.dt.map_or(d.dt, |v| v as Real),
                                 seconds: args.seconds.map_or(d.seconds, |v| v as Real),

@@ -104,7 +104,8 @@ pub enum Integrator {
     /// sweeps of per-node Newton steps (the cost knob; `docs/ARCHITECTURE.md` §4.2). A body
     /// with contact candidates first takes one sweep to find where it is going, the contacts
     /// act on that, then `iterations` sweeps answer them with the nodes they stopped held.
-    /// Every model but centroid springs, which steps explicitly.
+    /// Every model but centroid springs, which steps explicitly; so do bodies that meet other
+    /// deformables or have self contact on, for now (`docs/ARCHITECTURE.md` §4.2).
     Implicit {
         /// Sweeps per step.
         iterations: usize,

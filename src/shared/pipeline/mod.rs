@@ -429,8 +429,15 @@ fn step_group<'a>(
             }
         }
     }
-    // 3. substeps
-    substep::run(&ctx.settings.integrator, members, soft, ctx, bodies);
+    // 3. substeps. The implicit step does not answer contacts between deformables yet (two
+    // cubes stacked at 60 Hz went 40–105 mm into each other and gained energy): a group with
+    // such contacts steps explicitly.
+    let integrator = if soft {
+        Integrator::Explicit
+    } else {
+        ctx.settings.integrator
+    };
+    substep::run(&integrator, members, soft, ctx, bodies);
     record_touching(members);
     for (m, detached) in members.iter_mut().zip(detached) {
         finish_member(m, ctx, bodies, events, detached, report);

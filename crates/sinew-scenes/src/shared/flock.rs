@@ -11,6 +11,7 @@ use super::super::lib::rapier::dynamics::RigidBodyBuilder;
 use super::super::lib::rapier::geometry::{Ball, ColliderBuilder};
 use super::super::lib::BuildError;
 use super::super::lib::DeformableWorld;
+use super::super::lib::Integrator;
 use super::super::lib::Material;
 use super::fall::cuboid;
 use super::metrics::interpenetration;
@@ -367,6 +368,8 @@ pub struct StackScene {
     pub dt: Real,
     /// Simulated time, s.
     pub seconds: Real,
+    /// sinew's integrator.
+    pub integrator: Integrator,
 }
 
 impl Default for StackScene {
@@ -382,6 +385,7 @@ impl Default for StackScene {
             offset: 0.05,
             dt: 1.0 / 60.0,
             seconds: 4.0,
+            integrator: Integrator::Explicit,
         }
     }
 }
@@ -391,6 +395,7 @@ impl StackScene {
     pub fn run(&self) -> Result<Record, BuildError> {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
+        world.pipeline.settings.integrator = self.integrator;
         ground(&mut world, 5.0);
         let mesh = cube_mesh(self.size, self.resolution)?;
         let lower = BodySpec::new(mesh.clone(), UP * (0.5 * self.size), self.material);
