@@ -8,7 +8,7 @@ use super::super::lib::BuildError;
 use super::super::lib::DeformableWorld;
 use super::super::lib::Integrator;
 use super::super::lib::Material;
-use super::fall::ground;
+use super::fall::FallScene;
 use super::sim::{BodySpec, Bounce, Sim};
 use super::subject::Subject;
 use super::Record;
@@ -72,10 +72,14 @@ impl Default for BallScene {
 impl BallScene {
     /// The world: a fixed ground and the ball above it.
     pub fn sim(&self) -> Result<Sim, BuildError> {
-        let mut world = DeformableWorld::new();
-        world.set_dt(self.dt);
-        world.pipeline.settings.integrator = self.integrator;
-        ground(&mut world, self.friction, self.restitution);
+        let world = FallScene {
+            dt: self.dt,
+            integrator: self.integrator,
+            friction: self.friction,
+            restitution: self.restitution,
+            ..FallScene::default()
+        }
+        .ground_world();
         let mesh = Mesh::from_shape(&Ball::new(self.radius), self.cell_size, CellKind::Simplex)?;
         let material = Material {
             density: self.density,
