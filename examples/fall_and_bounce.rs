@@ -3,11 +3,12 @@
 //!
 //! ```text
 //! cargo run --release --example fall_and_bounce [-- --res 5 --seconds 5 --dt 0.001]
-//! cargo run --release --features rerun --example fall_and_bounce [-- --rrd DIR | --connect [ADDR]]
+//! cargo run --release --features rerun --example fall_and_bounce [-- --rrd DIR | --connect [ADDR]] [--log-every N]
 //! ```
 //!
-//! With the `rerun` feature every run is logged (every 10th step) to `out/fall_and_bounce/
-//! <dim>-<model>.rrd`, or to `--rrd DIR`, or streamed to a viewer with `--connect`.
+//! With the `rerun` feature every run is logged (every 10th step, or every `--log-every`-th) to
+//! `out/fall_and_bounce/<dim>-<model>.rrd`, or to `--rrd DIR`, or streamed to a viewer with
+//! `--connect`, and the logging cost per frame is printed beside the step's.
 
 #[path = "common/sink.rs"]
 mod sink;
@@ -27,7 +28,7 @@ macro_rules! run_dimension {
             #[cfg(feature = "rerun")]
             let mut recorder = {
                 use sinew::$dim::{RecorderOptions, RerunRecorder};
-                let options = RecorderOptions { every_n_steps: 10, ..Default::default() };
+                let options = RecorderOptions { every_n_steps: sink::arg("--log-every", 10), ..Default::default() };
                 let made = match $sink {
                     sink::Sink::Folder(dir) => {
                         let file = dir.join(format!("{}-{}.rrd", $label.to_lowercase(), model.name()));
@@ -57,8 +58,13 @@ macro_rules! run_dimension {
             if let Some(r) = recorder.as_ref() {
                 r.flush();
             }
+            #[cfg(feature = "rerun")]
+            let logging = recorder.as_ref().map(|r| (r.seconds_per_frame(), r.frames()));
+            #[cfg(not(feature = "rerun"))]
+            let logging: Option<(f64, u64)> = None;
             match outcome {
-                Ok(o) => println!(
+                Ok(o) => {
+                    println!(
                     "{:<3} {:<18} nodes {:>5}  apex {:>6}  rest {:.3} m  max pen {:.2e} m  inverted max {:>3} end {:>3}  substeps {:>5.1}  wall/sim {:.3} s{}",
                     $label,
                     model.name(),
@@ -71,7 +77,15 @@ macro_rules! run_dimension {
                     o.substeps,
                     o.wall_per_sim_s(),
                     if o.nan || o.exploded { "  BLEW UP" } else { "" }
-                ),
+                    );
+                    if let Some((seconds, frames)) = logging {
+                        println!(
+                            "    logging: {:.3} ms per frame ({frames} frames) against {:.3} ms per step",
+                            seconds * 1e3,
+                            o.wall_per_sim_s() * base.dt as f64 * 1e3
+                        );
+                    }
+                }
                 Err(e) => println!("{:<3} {:<18} failed to build: {e}", $label, model.name()),
             }
         }
@@ -88,6 +102,6 @@ fn main() {
     if cfg!(feature = "rerun") {
         sink::print_how_to_view(&sink, &files);
     } else {
-        sink::print_no_feature();
+        sink::print_no_feature("fall_and_bounce", "3d-edge-repulsion.rrd");
     }
 }

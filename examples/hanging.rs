@@ -119,6 +119,6 @@ fn main() {
     if cfg!(feature = "rerun") {
         sink::print_how_to_view(&sink, &files);
     } else {
-        sink::print_no_feature();
+        sink::print_no_feature("hanging", "3d.rrd");
     }
 }

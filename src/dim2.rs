@@ -225,21 +225,60 @@ pub mod math {
 pub(crate) mod render {
     use super::math::{Pose, Vector};
     use rapier2d::geometry::Shape;
+    use rerun::external::re_sdk_types::blueprint::archetypes::VisualBounds2D;
+    use rerun::external::re_sdk_types::datatypes::{Range1D, Range2D};
     use rerun::{
         Boxes2D, Color, Ellipses2D, LineStrips2D, Points2D, Quaternion, RecordingStream,
         RecordingStreamResult, Transform3D,
     };
 
-    /// Nothing to log: 2D views take their axes from the data (rapier's y up is drawn upwards
-    /// by flipping y in the positions logged; see `p`).
-    pub fn view_coordinates(_rec: &RecordingStream) -> RecordingStreamResult<()> {
-        Ok(())
+    /// The world view's space origin in the blueprint (above `world`, whose transform mirrors y).
+    pub const VIEW_ORIGIN: &str = "/";
+
+    /// The world view's class in the blueprint.
+    pub const VIEW_CLASS: &str = "2D";
+
+    /// Rerun's 2D views draw y downwards (image convention); rapier's y is up. Positions are
+    /// logged as they are and `world` gets a transform that mirrors y, so a view rooted above
+    /// it (sinew's layout roots it at `/`) draws y up.
+    pub fn view_coordinates(rec: &RecordingStream) -> RecordingStreamResult<()> {
+        rec.log_static("world", &Transform3D::from_scale([1.0, -1.0, 1.0]))
     }
 
-    // Rerun's 2D views draw y downwards (image convention): positions are logged as they are
-    // and documented so; users who want y up flip the view in the viewer.
     fn p(v: Vector) -> [f32; 2] {
         v.to_array()
+    }
+
+    /// Frames the 2D view at `view` (a blueprint path) on the box `lo`–`hi` (in `world`'s
+    /// coordinates, y up), with a margin of a quarter of its size.
+    pub fn frame_view(
+        rec: &RecordingStream,
+        view: &str,
+        lo: Vector,
+        hi: Vector,
+        _track: Option<&str>,
+    ) -> RecordingStreamResult<()> {
+        let margin = 0.25 * (hi - lo).max(Vector::splat(0.1));
+        let (lo, hi) = ((lo - margin).as_dvec2(), (hi + margin).as_dvec2());
+        let bounds = Range2D {
+            x_range: Range1D([lo.x, hi.x]),
+            // The view sees `world` mirrored in y.
+            y_range: Range1D([-hi.y, -lo.y]),
+        };
+        rec.log(
+            format!("{view}/VisualBounds2D"),
+            &VisualBounds2D::new(bounds),
+        )
+    }
+
+    /// The surface's wireframe: a 2D surface is already drawn as lines, so nothing.
+    pub fn wireframe(
+        _rec: &RecordingStream,
+        _path: &str,
+        _segments: &[[Vector; 2]],
+        _color: Color,
+    ) -> RecordingStreamResult<()> {
+        Ok(())
     }
 
     /// The surface topology is carried by the strips themselves in 2D.

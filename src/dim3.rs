@@ -296,10 +296,57 @@ pub mod math {
 pub(crate) mod render {
     use super::math::{Pose, Vector};
     use rapier3d::geometry::Shape;
+    use rerun::external::re_sdk_types::blueprint::archetypes::EyeControls3D;
+    use rerun::external::re_sdk_types::blueprint::components::Eye3DKind;
     use rerun::{
         Boxes3D, Capsules3D, Color, Ellipsoids3D, LineStrips3D, Mesh3D, Points3D, Quaternion,
-        RecordingStream, RecordingStreamResult, Transform3D, ViewCoordinates,
+        Radius, RecordingStream, RecordingStreamResult, Transform3D, ViewCoordinates,
     };
+
+    /// The world view's space origin in the blueprint (the view coordinates are logged there).
+    pub const VIEW_ORIGIN: &str = "/world";
+
+    /// The world view's class in the blueprint.
+    pub const VIEW_CLASS: &str = "3D";
+
+    /// Frames the 3D view at `view` (a blueprint path) on the box `lo`–`hi`: an orbit eye in
+    /// front, to the right and above its centre, far enough to see the whole box, y up;
+    /// following `track` if given.
+    pub fn frame_view(
+        rec: &RecordingStream,
+        view: &str,
+        lo: Vector,
+        hi: Vector,
+        track: Option<&str>,
+    ) -> RecordingStreamResult<()> {
+        let centre = 0.5 * (lo + hi);
+        let radius = (0.5 * (hi - lo).length()).max(0.05);
+        let eye = centre + Vector::new(0.5, 0.35, 1.0).normalize() * (2.6 * radius);
+        let mut controls = EyeControls3D::new()
+            .with_kind(Eye3DKind::Orbital)
+            .with_position(p(eye))
+            .with_look_target(p(centre))
+            .with_eye_up([0.0, 1.0, 0.0]);
+        if let Some(entity) = track {
+            controls = controls.with_tracking_entity(entity);
+        }
+        rec.log(format!("{view}/EyeControls3D"), &controls)
+    }
+
+    /// Thin lines of a fixed on-screen width (the surface's wireframe).
+    pub fn wireframe(
+        rec: &RecordingStream,
+        path: &str,
+        segments: &[[Vector; 2]],
+        color: Color,
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &LineStrips3D::new(segments.iter().map(|s| [p(s[0]), p(s[1])]))
+                .with_colors([color])
+                .with_radii([Radius::new_ui_points(0.6)]),
+        )
+    }
 
     /// The world's axes: y up, right-handed (as rapier).
     pub fn view_coordinates(rec: &RecordingStream) -> RecordingStreamResult<()> {

@@ -1,7 +1,9 @@
 //! Writes `.rrd` files of a short fall and bounce (2D and 3D) and reads them back with the real
 //! Python client (`rerun-sdk==0.36.3`): `tests/rerun/check_rrd.py` checks the entity paths, that
 //! the surface vertices at each logged step equal the simulated node positions, that the
-//! inverted-elements series has one value per logged frame, and `rerun rrd verify` the file.
+//! inverted-elements series has one value per logged frame, and `rerun rrd verify` the file;
+//! `tests/rerun/check_blueprint.py` that the layout sent with it shows the deformables in a
+//! world view framed on them and every `stats/` series in some plot.
 //!
 //! Needs a Python with `rerun-sdk==0.36.3`: `SINEW_PYTHON=/path/to/python` (`.ci/run` makes a
 //! venv under `target/rerun-venv`); the `rerun` CLI is taken from the same `bin/` folder.
@@ -18,9 +20,14 @@ fn python() -> PathBuf {
 }
 
 fn check(dim: &str, rrd: &PathBuf, expected: &PathBuf) {
+    run_check("tests/rerun/check_rrd.py", dim, rrd, expected);
+}
+
+/// Runs one of the Python checks on a recording and the JSON of what it must hold.
+fn run_check(script: &str, dim: &str, rrd: &PathBuf, expected: &PathBuf) {
     let py = python();
     let out = Command::new(&py)
-        .arg("tests/rerun/check_rrd.py")
+        .arg(script)
         .arg(rrd)
         .arg(expected)
         .output()
@@ -58,6 +65,11 @@ macro_rules! fall_to_rrd {
             let sim = scene.sim().unwrap();
             let h = sim.handle().unwrap();
             let mut world = sim.world;
+            let (lo, hi) = bounds(world.deformables[h].positions().iter().map(|x| x.to_array().to_vec()));
+            let ground = world.physics.colliders.iter().map(|(_, c)| {
+                let b = c.compute_aabb();
+                (b.maxs - b.mins).max_element()
+            }).fold(0.0f32, f32::max);
             let options = RecorderOptions { every_n_steps: 50, nodes: true, contacts: true, ..Default::default() };
             let mut recorder = RerunRecorder::save("sinew-test", &rrd, options).unwrap();
             recorder.set_name(h, "jelly");
@@ -87,8 +99,80 @@ macro_rules! fall_to_rrd {
             );
             std::fs::write(&expected, json).unwrap();
             check($label, &rrd, &expected);
+            let layout = dir.join(format!("fall-{}-layout.json", $label));
+            let class = if $component == "Mesh3D:vertex_positions" { "3D" } else { "2D" };
+            std::fs::write(&layout, format!(
+                "{{\"class\":\"{class}\",\"bodies\":[\"jelly\"],\"box\":[{},{}],\"ground\":{ground}}}",
+                json_vec(&lo), json_vec(&hi)
+            )).unwrap();
+            run_check("tests/rerun/check_blueprint.py", $label, &rrd, &layout);
         }
     };
+}
+
+/// The per-axis box of some points.
+fn bounds(points: impl Iterator<Item = Vec<f32>>) -> (Vec<f32>, Vec<f32>) {
+    let mut lo: Vec<f32> = Vec::new();
+    let mut hi: Vec<f32> = Vec::new();
+    for p in points {
+        if lo.is_empty() {
+            lo = p.clone();
+            hi = p;
+            continue;
+        }
+        for (a, v) in p.into_iter().enumerate() {
+            lo[a] = lo[a].min(v);
+            hi[a] = hi[a].max(v);
+        }
+    }
+    (lo, hi)
+}
+
+/// Several bodies: one plot per metric, a series per body, every series shown, the view framed
+/// on the bodies and the ground right under them, not on the whole ground.
+#[test]
+fn several_bodies_get_a_plot_per_metric() {
+    use sinew::dim3::math::Vector;
+    use sinew::dim3::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
+    use sinew::dim3::{DeformableBuilder, DeformableWorld, RecorderOptions, RerunRecorder};
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rerun");
+    let rrd = dir.join("several.rrd");
+    let _ = std::fs::remove_file(&rrd);
+    let mut world = DeformableWorld::new();
+    world.physics.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, -0.1, 0.0)),
+        ColliderBuilder::cuboid(20.0, 0.1, 20.0),
+    );
+    let names = ["left", "right", "top"];
+    let mut recorder = RerunRecorder::save("sinew-test", &rrd, RecorderOptions::default()).unwrap();
+    let mut all = Vec::new();
+    for (k, name) in names.iter().enumerate() {
+        let body = DeformableBuilder::cuboid(Vector::splat(0.25), [3, 3, 3])
+            .translation(Vector::new(k as f32 - 1.0, 1.0 + 0.5 * k as f32, 0.0))
+            .build()
+            .unwrap();
+        all.extend(body.positions().iter().map(|x| x.to_array().to_vec()));
+        let h = world.insert(body);
+        recorder.set_name(h, name);
+    }
+    let (lo, hi) = bounds(all.into_iter());
+    for _ in 0..20 {
+        world.step();
+        recorder.log_world(&world).unwrap();
+    }
+    recorder.flush();
+    drop(recorder);
+    let layout = dir.join("several-layout.json");
+    std::fs::write(
+        &layout,
+        format!(
+            "{{\"class\":\"3D\",\"bodies\":[\"left\",\"right\",\"top\"],\"box\":[{},{}],\"ground\":40}}",
+            json_vec(&lo),
+            json_vec(&hi)
+        ),
+    )
+    .unwrap();
+    run_check("tests/rerun/check_blueprint.py", "several", &rrd, &layout);
 }
 
 fall_to_rrd!(

@@ -64,9 +64,17 @@ pub fn print_how_to_view(sink: &Sink, files: &[PathBuf]) {
     }
 }
 
-/// Prints that logging is compiled out.
-pub fn print_no_feature() {
-    println!("\n(built without `--features rerun`: nothing logged; add it to record .rrd files)");
+/// Prints that logging is compiled out, and exactly how to get a recording.
+pub fn print_no_feature(example: &str, first_file: &str) {
+    println!(
+        "\nNo Rerun recording: this build has no `rerun` feature. To record and view the runs:"
+    );
+    println!(
+        "  cargo run --release --features rerun --example {example}   # writes out/{example}/*.rrd"
+    );
+    println!("  pip install rerun-sdk==0.36.3                              # the viewer, once");
+    println!("  rerun out/{example}/{first_file}");
+    println!("(the first build with `rerun` compiles its SDK: see README, \"Viewing runs in Rerun\", for the time it takes)");
 }
 
 /// The value after `name` on the command line, parsed, or `default`.

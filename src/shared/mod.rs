@@ -19,7 +19,6 @@ pub mod model;
 mod pipeline;
 mod query;
 #[cfg(feature = "rerun")]
-#[path = "rerun.rs"]
 mod recorder;
 mod report;
 mod set;

@@ -16,19 +16,31 @@
 //! | `world/deformables/<name>/attachments` | segment node → its anchor on the bone | if `attachments` |
 //! | `world/deformables/<name>/contacts/points`, `.../contacts/normals` | last step's contact points and normals | if `contacts` |
 //! | `world/colliders/<index>_<generation>` | the collider's shape (static) and pose (per frame); grey fixed, orange kinematic (bones), blue dynamic | every logged frame |
-//! | `stats/<name>/<metric>` | `Scalars`: `kinetic_energy`, `elastic_energy`, `inverted_elements`, `min_volume_ratio`, `max_penetration`, `contacts`, `substeps`, `ms_forces`, `ms_contacts`, `ms_integrate`, `frozen` (0/1), `log_ms` | every logged frame |
+//! | `world/deformables/<name>/wireframe` | 3D: the surface's edges as thin dark lines | if `wireframe` |
+//! | `stats/<name>/<metric>` | `Scalars` (each [`METRICS`] entry): `kinetic_energy`, `elastic_energy`, `gravity_energy`, `total_energy` (their sum), `inverted_elements`, `min_volume_ratio`, `max_penetration`, `contacts`, `substeps`, `ms_forces`, `ms_contacts`, `ms_integrate`, `frozen` (0/1), `log_ms` | every logged frame |
 //! | `events/<name>` | `TextLog`: a warning when the body is frozen (why: non-finite state or a blow-up), info when it resumes | when it changes |
+//! | `legend` | `TextDocument` (markdown): what the colours and lines mean, with the colour range | static |
 //!
 //! `<name>` is what [`RerunRecorder::set_name`] gave the deformable, else `d<index>`.
 //!
 //! Colours: [`ColorField::VolumeRatio`] shades each surface vertex by the smallest volume ratio
-//! of its cells (red compressed, white at rest, blue stretched); [`ColorField::Strain`] by the
-//! mean `|L/L0 − 1|` of its incident vertex pairs (white 0 → red 0.25 and beyond; a stress
-//! proxy is this times Young's modulus, so it is drawn the same). A vertex of a collapsed or
-//! inverted cell is magenta in either case.
+//! `r` of its cells: white at rest, red as it is compressed (full red at
+//! `r ≤ 1 − color_range`), blue as it is stretched (full blue at `r ≥ 1 + color_range`);
+//! [`ColorField::Strain`] by the mean `|L/L0 − 1|` of its incident vertex pairs (white 0 → full
+//! red at `color_range`; a stress proxy is this times Young's modulus, so it is drawn the same).
+//! A vertex of a collapsed or inverted cell is magenta in either case. The range is
+//! [`RecorderOptions::color_range`], 0.1 by default: the main demo's impact (smallest volume
+//! ratio about 0.95) shows half red. The `legend` entity says all this in the recording.
+//!
+//! Layout: with [`RecorderOptions::blueprint`] (the default) the first frame sends a blueprint
+//! (see the `blueprint` module): the world view framed on the deformables (the eye follows a
+//! lone 3D body), the legend under it, and every `stats/` series in one of three plot groups
+//! (energy, quality, cost). It is sent again when deformables are added or removed.
 
 use std::collections::HashMap;
 use std::time::Instant;
+
+mod blueprint;
 
 use super::body::Deformable;
 use super::math::{Real, Vector, FACET_ARITY};
@@ -37,7 +49,7 @@ use super::rapier::geometry::{ColliderHandle, ColliderSet};
 use super::render;
 use super::set::{DeformableHandle, DeformableSet};
 use super::world::DeformableWorld;
-use rerun::{Color, Scalars, TextLog, TextLogLevel};
+use rerun::{Color, Scalars, SeriesLines, TextDocument, TextLog, TextLogLevel};
 pub use rerun::{RecordingStream, RecordingStreamBuilder};
 
 /// Which field colours the surface.
@@ -67,6 +79,13 @@ pub struct RecorderOptions {
     pub contacts: bool,
     /// Log every n-th call of [`RerunRecorder::log_frame`] (1 = every step).
     pub every_n_steps: u64,
+    /// How far the coloured field goes from rest before the colour is full (volume ratio
+    /// `1 ± color_range`, strain `color_range`); 0.1 by default.
+    pub color_range: Real,
+    /// Log the surface's edges (3D) as thin dark lines over the coloured mesh.
+    pub wireframe: bool,
+    /// Send sinew's layout (a Rerun blueprint) with the recording.
+    pub blueprint: bool,
 }
 
 impl Default for RecorderOptions {
@@ -78,6 +97,9 @@ impl Default for RecorderOptions {
             attachments: true,
             contacts: false,
             every_n_steps: 1,
+            color_range: 0.1,
+            wireframe: true,
+            blueprint: true,
         }
     }
 }
@@ -98,9 +120,31 @@ pub enum RecorderError {
     },
 }
 
+/// Every `stats/<name>/<metric>` series, in the order they are logged.
+pub const METRICS: &[&str] = &[
+    "kinetic_energy",
+    "elastic_energy",
+    "gravity_energy",
+    "total_energy",
+    "inverted_elements",
+    "min_volume_ratio",
+    "max_penetration",
+    "contacts",
+    "substeps",
+    "ms_forces",
+    "ms_contacts",
+    "ms_integrate",
+    "frozen",
+    "log_ms",
+];
+
 struct DeformableLog {
     name: String,
+    /// `stats/<name>/<metric>` for each of [`METRICS`].
+    stats: Vec<String>,
     surface: Vec<u32>,
+    /// Surface edges (pairs of surface vertex slots), for the wireframe.
+    surface_edges: Vec<[u32; 2]>,
     facets: Vec<[u32; FACET_ARITY]>,
     /// Per node (CSR): incident cells.
     cell_start: Vec<u32>,
@@ -122,6 +166,8 @@ pub struct RerunRecorder {
     names: HashMap<DeformableHandle, String>,
     shapes_logged: HashMap<ColliderHandle, bool>,
     view_logged: bool,
+    /// The deformables' names the last blueprint was made for.
+    blueprint_for: Vec<String>,
     calls: u64,
     frames: u64,
     log_seconds: f64,
@@ -133,6 +179,10 @@ const DYNAMIC: [u8; 3] = [70, 130, 220];
 const INVERTED: [u8; 3] = [255, 0, 255];
 const ATTACHMENT: [u8; 3] = [240, 200, 40];
 const CONTACT: [u8; 3] = [40, 200, 90];
+const WIRE: [u8; 3] = [60, 60, 70];
+const REST: [f32; 3] = [235.0, 235.0, 235.0];
+const COMPRESSED: [f32; 3] = [215.0, 30.0, 30.0];
+const STRETCHED: [f32; 3] = [40.0, 90.0, 220.0];
 
 fn rgb(c: [u8; 3]) -> Color {
     Color::from_rgb(c[0], c[1], c[2])
@@ -154,6 +204,7 @@ impl RerunRecorder {
             names: HashMap::new(),
             shapes_logged: HashMap::new(),
             view_logged: false,
+            blueprint_for: Vec::new(),
             calls: 0,
             frames: 0,
             log_seconds: 0.0,
@@ -243,6 +294,7 @@ impl RerunRecorder {
         let rec = self.rec.clone();
         if !self.view_logged {
             render::view_coordinates(&rec)?;
+            rec.log_static("legend", &TextDocument::from_markdown(self.legend()))?;
             self.view_logged = true;
         }
         rec.set_time_sequence("step", step as i64);
@@ -277,18 +329,100 @@ impl RerunRecorder {
             let log = self.deformables.get_mut(&handle).expect("inserted above");
             log.log(&rec, body, bodies, &self.options)?;
         }
+        self.deformables
+            .retain(|handle, _| deformables.get(*handle).is_some());
+        if self.options.blueprint {
+            self.send_blueprint_if_new(colliders, deformables)?;
+        }
         let seconds = start.elapsed().as_secs_f64();
         self.log_seconds += seconds;
         self.frames += 1;
         for (handle, _) in deformables.iter() {
             if let Some(log) = self.deformables.get(&handle) {
-                rec.log(
-                    format!("stats/{}/log_ms", log.name),
-                    &Scalars::single(seconds * 1e3),
-                )?;
+                let path = &log.stats[METRICS.len() - 1];
+                rec.log(path.as_str(), &Scalars::single(seconds * 1e3))?;
             }
         }
         Ok(true)
+    }
+
+    /// Sends the layout if the deformables' names changed since the last one sent (and there
+    /// are some): their series names, then the blueprint framed on them.
+    fn send_blueprint_if_new(
+        &mut self,
+        colliders: &ColliderSet,
+        deformables: &DeformableSet,
+    ) -> Result<(), RecorderError> {
+        let mut names: Vec<String> = self.deformables.values().map(|d| d.name.clone()).collect();
+        names.sort_unstable();
+        if names.is_empty() || names == self.blueprint_for {
+            return Ok(());
+        }
+        let several = names.len() > 1;
+        for log in self.deformables.values() {
+            for (metric, path) in METRICS.iter().zip(&log.stats) {
+                let label = if several {
+                    format!("{} {metric}", log.name)
+                } else {
+                    metric.to_string()
+                };
+                self.rec
+                    .log_static(path.as_str(), &SeriesLines::new().with_names([label]))?;
+            }
+        }
+        let mut lo = Vector::splat(Real::INFINITY);
+        let mut hi = Vector::splat(Real::NEG_INFINITY);
+        for (_, body) in deformables.iter() {
+            for &x in body.positions() {
+                lo = lo.min(x);
+                hi = hi.max(x);
+            }
+        }
+        let boxes = colliders.iter().map(|(_, co)| {
+            let aabb = co.compute_aabb();
+            (aabb.mins, aabb.maxs)
+        });
+        // A lone 3D body is followed by the eye: framed alone. Otherwise the view stays put,
+        // framed on the bodies and the colliders right under them (where they will land).
+        let framing = if names.len() == 1 && render::VIEW_CLASS == "3D" {
+            blueprint::Framing {
+                lo,
+                hi,
+                track: Some(format!("world/deformables/{}/surface", names[0])),
+            }
+        } else {
+            let (lo, hi) = blueprint::framing_box((lo, hi), boxes, 1);
+            blueprint::Framing {
+                lo,
+                hi,
+                track: None,
+            }
+        };
+        blueprint::send(&self.rec, render::VIEW_CLASS, &names, framing)?;
+        self.blueprint_for = names;
+        Ok(())
+    }
+
+    /// The `legend` text: what the colours and lines mean, with the range in use.
+    fn legend(&self) -> String {
+        let r = self.options.color_range;
+        let field = match self.options.color_field {
+            ColorField::Uniform => "one colour".to_string(),
+            ColorField::VolumeRatio => format!(
+                "smallest volume ratio of the node's cells: **white** 1 (rest), **red** \
+                 compressed (full at ≤ {:.2}), **blue** stretched (full at ≥ {:.2})",
+                1.0 - r,
+                1.0 + r
+            ),
+            ColorField::Strain => format!(
+                "mean edge strain |L/L0 − 1| at the node: **white** 0, **red** full at ≥ {r:.2}"
+            ),
+        };
+        format!(
+            "**Surface colour**: {field}; **magenta**: a collapsed or inverted cell. \
+             Dark lines: surface edges. Yellow: bindings to bones. \
+             Colliders: grey fixed, orange kinematic (bones), blue dynamic."
+        )
     }
 
     /// Flushes everything to the sink.
@@ -307,10 +441,30 @@ impl DeformableLog {
         for (k, &i) in surface.iter().enumerate() {
             slot[i as usize] = k as u32;
         }
-        let facets = mesh
+        let facets: Vec<[u32; FACET_ARITY]> = mesh
             .boundary_facets()
             .iter()
             .map(|f| std::array::from_fn(|a| slot[f[a] as usize]))
+            .collect();
+        // A facet's edges (a 2D facet is itself one edge, drawn by the surface).
+        let mut surface_edges: Vec<[u32; 2]> = if FACET_ARITY > 2 {
+            facets
+                .iter()
+                .flat_map(|f| {
+                    (0..FACET_ARITY).map(move |a| {
+                        let (i, j) = (f[a], f[(a + 1) % FACET_ARITY]);
+                        [i.min(j), i.max(j)]
+                    })
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        surface_edges.sort_unstable();
+        surface_edges.dedup();
+        let stats = METRICS
+            .iter()
+            .map(|m| format!("stats/{name}/{m}"))
             .collect();
         let mut count = vec![0u32; n + 1];
         for c in mesh.cells() {
@@ -349,7 +503,9 @@ impl DeformableLog {
         }
         DeformableLog {
             name,
+            stats,
             surface,
+            surface_edges,
             facets,
             cell_start: count,
             cells,
@@ -360,7 +516,14 @@ impl DeformableLog {
         }
     }
 
-    fn color(&self, node: usize, body: &Deformable, quality: &[Real], field: ColorField) -> Color {
+    fn color(
+        &self,
+        node: usize,
+        body: &Deformable,
+        quality: &[Real],
+        options: &RecorderOptions,
+    ) -> Color {
+        let range = options.color_range.max(1e-6);
         let cells = &self.cells[self.cell_start[node] as usize..self.cell_start[node + 1] as usize];
         let worst = cells
             .iter()
@@ -369,14 +532,13 @@ impl DeformableLog {
         if worst <= 0.0 {
             return rgb(INVERTED);
         }
-        const REST: [f32; 3] = [235.0, 235.0, 235.0];
-        match field {
+        match options.color_field {
             ColorField::Uniform => Color::from_rgb(200, 200, 210),
             ColorField::VolumeRatio => {
                 if worst < 1.0 {
-                    lerp(REST, [220.0, 40.0, 40.0], (1.0 - worst) / 0.7)
+                    lerp(REST, COMPRESSED, (1.0 - worst) / range)
                 } else {
-                    lerp(REST, [40.0, 90.0, 220.0], (worst - 1.0) / 0.5)
+                    lerp(REST, STRETCHED, (worst - 1.0) / range)
                 }
             }
             ColorField::Strain => {
@@ -388,7 +550,7 @@ impl DeformableLog {
                     .map(|(other, l0)| (x[node].distance(x[*other as usize]) / l0 - 1.0).abs())
                     .sum::<Real>()
                     / pairs.len().max(1) as Real;
-                lerp(REST, [220.0, 40.0, 40.0], strain / 0.25)
+                lerp(REST, COMPRESSED, strain / range)
             }
         }
     }
@@ -415,12 +577,20 @@ impl DeformableLog {
         let colors: Vec<Color> = self
             .surface
             .iter()
-            .map(|&i| self.color(i as usize, body, &quality, options.color_field))
+            .map(|&i| self.color(i as usize, body, &quality, options))
             .collect();
         render::surface(rec, &surface_path, &vertices, &self.facets, &colors)?;
+        if options.wireframe && !self.surface_edges.is_empty() {
+            let segments: Vec<[Vector; 2]> = self
+                .surface_edges
+                .iter()
+                .map(|e| [vertices[e[0] as usize], vertices[e[1] as usize]])
+                .collect();
+            render::wireframe(rec, &format!("{base}/wireframe"), &segments, rgb(WIRE))?;
+        }
         if options.nodes {
             let colors: Vec<Color> = (0..x.len())
-                .map(|i| self.color(i, body, &quality, options.color_field))
+                .map(|i| self.color(i, body, &quality, options))
                 .collect();
             render::points(rec, &format!("{base}/nodes"), x, &colors, 0.005)?;
         }
@@ -479,20 +649,25 @@ impl DeformableLog {
             )?;
         }
         let r = body.report();
-        let stats = format!("stats/{}", self.name);
-        let scalar =
-            |metric: &str, v: f64| rec.log(format!("{stats}/{metric}"), &Scalars::single(v));
-        scalar("kinetic_energy", r.kinetic_energy as f64)?;
-        scalar("elastic_energy", r.elastic_energy as f64)?;
-        scalar("inverted_elements", r.inverted_elements as f64)?;
-        scalar("min_volume_ratio", r.min_volume_ratio as f64)?;
-        scalar("max_penetration", r.max_penetration as f64)?;
-        scalar("contacts", r.contacts as f64)?;
-        scalar("substeps", r.substeps as f64)?;
-        scalar("ms_forces", r.time_forces * 1e3)?;
-        scalar("ms_contacts", r.time_contacts * 1e3)?;
-        scalar("ms_integrate", r.time_integrate * 1e3)?;
-        scalar("frozen", if body.is_frozen() { 1.0 } else { 0.0 })?;
+        let values: [f64; METRICS.len() - 1] = [
+            r.kinetic_energy as f64,
+            r.elastic_energy as f64,
+            r.gravity_energy as f64,
+            (r.kinetic_energy + r.elastic_energy + r.gravity_energy) as f64,
+            r.inverted_elements as f64,
+            r.min_volume_ratio as f64,
+            r.max_penetration as f64,
+            r.contacts as f64,
+            r.substeps as f64,
+            r.time_forces * 1e3,
+            r.time_contacts * 1e3,
+            r.time_integrate * 1e3,
+            if body.is_frozen() { 1.0 } else { 0.0 },
+        ];
+        // `log_ms` (the last metric) is logged by the recorder once the frame is done.
+        for (path, v) in self.stats.iter().zip(values) {
+            rec.log(path.as_str(), &Scalars::single(v))?;
+        }
         if body.is_frozen() != self.was_frozen {
             let text = if !body.is_frozen() {
                 format!("{} resumed", self.name)
