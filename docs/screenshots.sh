@@ -4,8 +4,9 @@
 # `cargo run --release --features rerun --example fall_and_bounce` at the impact frame (the frame
 # of the smallest volume ratio), as the viewer draws them with the layout sinew sends.
 #
-# The viewer opens a file at its last frame, so the demo runs twice: once whole, to find the
-# impact frame in its recording, then again up to that frame (the same run, cut there).
+# The viewer plays a file from its start in simulated time (the layout's time panel) and stops at
+# its end, so the demo runs twice: once whole, to find the impact frame in its recording, then
+# again up to that frame (the same run, cut there); the screenshot shows that last frame.
 #
 # Needs: Xvfb and a Vulkan driver (Debian: `apt-get install xvfb mesa-vulkan-drivers`; the
 # viewer then renders on the CPU with llvmpipe) and Python 3 with pip (the viewer comes from
@@ -51,7 +52,9 @@ PY
     "$demo" --rrd "$out/impact-$dim" --seconds "$seconds" >/dev/null
     png="$out/fall-impact-$dim.png"
     # The viewer saves the screenshot, then may exit non-zero on its way out; the file decides.
-    timeout 300 xvfb-run -a -s "-screen 0 1920x1080x24" "$venv/bin/rerun" \
+    # The screen is larger than the window so that Xvfb's pointer (at the screen's centre) is
+    # not over the window, where it would open a hover tooltip.
+    timeout 300 xvfb-run -a -s "-screen 0 6400x4000x24" "$venv/bin/rerun" \
         "$out/impact-$dim/$dim-edge-repulsion.rrd" --renderer vulkan \
         --window-size 1400x860 --screenshot-to "$png" >"$out/viewer-$dim.log" 2>&1 || true
     if [ ! -s "$png" ]; then

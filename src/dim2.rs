@@ -318,7 +318,7 @@ pub(crate) mod render {
             path,
             &LineStrips2D::new(strips)
                 .with_colors(strip_colors)
-                .with_radii([0.01]),
+                .with_radii([rerun::Radius::new_ui_points(2.5)]),
         )
     }
 

@@ -321,7 +321,7 @@ pub(crate) mod render {
     ) -> RecordingStreamResult<()> {
         let centre = 0.5 * (lo + hi);
         let radius = (0.5 * (hi - lo).length()).max(0.05);
-        let eye = centre + Vector::new(0.5, 0.35, 1.0).normalize() * (2.6 * radius);
+        let eye = centre + Vector::new(0.6, 0.5, 1.0).normalize() * (4.0 * radius);
         let mut controls = EyeControls3D::new()
             .with_kind(Eye3DKind::Orbital)
             .with_position(p(eye))

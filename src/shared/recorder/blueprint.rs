@@ -11,7 +11,8 @@
 
 use rerun::external::re_log_types::{BlueprintActivationCommand, RecordingId};
 use rerun::external::re_sdk_types::blueprint::archetypes::{
-    ContainerBlueprint, PanelBlueprint, ViewBlueprint, ViewContents, ViewportBlueprint,
+    ContainerBlueprint, PanelBlueprint, TimePanelBlueprint, ViewBlueprint, ViewContents,
+    ViewportBlueprint,
 };
 use rerun::external::re_sdk_types::blueprint::components::{
     AutoLayout, AutoViews, ContainerKind, PanelState, QueryExpression, RootContainer, ViewClass,
@@ -20,9 +21,12 @@ use rerun::{RecordingStream, RecordingStreamBuilder, RecordingStreamResult};
 
 use super::super::math::{Vector, DIM};
 
+/// A plot: its title and the metrics it shows.
+pub type Plot = (&'static str, &'static [&'static str]);
+
 /// Every `stats/<name>/<metric>` series the recorder logs, grouped as the layout shows them:
 /// `(group, [(plot title, [metrics])])`.
-pub const PLOTS: &[(&str, &[(&str, &[&str])])] = &[
+pub const PLOTS: &[(&str, &[Plot])] = &[
     (
         "energy",
         &[(
@@ -107,7 +111,7 @@ fn container(kind: ContainerKind, name: Option<&str>, shares: &[f32], children: 
 
 /// The plots of one group: for one body, each plot of [`PLOTS`] as it is; for several, one plot
 /// per metric with a series per body.
-fn group(name: &str, plots: &[(&str, &[&str])], bodies: &[String]) -> Node {
+fn group(name: &str, plots: &[Plot], bodies: &[String]) -> Node {
     let series = |metric: &str| -> Vec<String> {
         bodies
             .iter()
@@ -150,7 +154,7 @@ fn layout(class: &'static str, bodies: &[String], framing: Framing) -> Node {
     let left = container(
         ContainerKind::Vertical,
         None,
-        &[7.0, 1.0],
+        &[6.0, 1.0],
         vec![world, legend],
     );
     let groups: Vec<Node> = PLOTS
@@ -287,6 +291,11 @@ pub fn send(
     let collapsed = PanelBlueprint::new().with_state(PanelState::Collapsed);
     rec.log("blueprint_panel", &collapsed)?;
     rec.log("selection_panel", &collapsed)?;
+    // Play back in simulated time (1 s of run per s), not one step per frame of the viewer.
+    rec.log(
+        "time_panel",
+        &TimePanelBlueprint::new().with_timeline("sim_time"),
+    )?;
     let messages = storage.take();
     let Some(blueprint_id) = messages.first().map(|m| m.store_id().clone()) else {
         return Ok(());

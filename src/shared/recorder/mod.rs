@@ -410,18 +410,18 @@ impl RerunRecorder {
             ColorField::Uniform => "one colour".to_string(),
             ColorField::VolumeRatio => format!(
                 "smallest volume ratio of the node's cells: **white** 1 (rest), **red** \
-                 compressed (full at ≤ {:.2}), **blue** stretched (full at ≥ {:.2})",
+                 compressed (full at {:.2}), **blue** stretched (full at {:.2})",
                 1.0 - r,
                 1.0 + r
             ),
-            ColorField::Strain => format!(
-                "mean edge strain |L/L0 − 1| at the node: **white** 0, **red** full at ≥ {r:.2}"
-            ),
+            ColorField::Strain => {
+                format!("mean edge strain at the node: **white** 0, **red** full at {r:.2}")
+            }
         };
         format!(
-            "**Surface colour**: {field}; **magenta**: a collapsed or inverted cell. \
-             Dark lines: surface edges. Yellow: bindings to bones. \
-             Colliders: grey fixed, orange kinematic (bones), blue dynamic."
+            "**Colour**: {field}, **magenta** a collapsed or inverted cell. Dark lines: surface \
+             edges; yellow: bindings to bones. Colliders: grey fixed, orange kinematic, blue \
+             dynamic."
         )
     }
 
