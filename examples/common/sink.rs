@@ -67,14 +67,12 @@ pub fn print_how_to_view(sink: &Sink, files: &[PathBuf]) {
 /// Prints that logging is compiled out, and exactly how to get a recording.
 pub fn print_no_feature(example: &str, first_file: &str) {
     println!(
-        "\nNo Rerun recording: this build has no `rerun` feature. To record and view the runs:"
+        "\nNo Rerun recording: this build has no `rerun` feature. To record the runs and view one:"
     );
-    println!(
-        "  cargo run --release --features rerun --example {example}   # writes out/{example}/*.rrd"
-    );
-    println!("  pip install rerun-sdk==0.36.3                              # the viewer, once");
+    println!("  cargo run --release --features rerun --example {example}");
+    println!("  pip install rerun-sdk==0.36.3");
     println!("  rerun out/{example}/{first_file}");
-    println!("(the first build with `rerun` compiles its SDK: see README, \"Viewing runs in Rerun\", for the time it takes)");
+    println!("(the first build with `rerun` compiles its SDK; README, \"Viewing runs in Rerun\", says how long)");
 }
 
 /// The value after `name` on the command line, parsed, or `default`.
