@@ -40,6 +40,8 @@ for chunk in rrx.RrdReader(sys.argv[1]).stream().to_chunks():
     if str(chunk.entity_path) != "/stats/jelly/min_volume_ratio":
         continue
     batch = chunk.to_record_batch()
+    if not {"step", "Scalars:scalars"} <= set(batch.schema.names):
+        continue  # the static series name
     col = lambda n: batch.column(batch.schema.get_field_index(n)).to_pylist()
     for step, value in zip(col("step"), col("Scalars:scalars")):
         v = value[0] if isinstance(value, list) else value
@@ -54,7 +56,8 @@ PY
     # The viewer saves the screenshot, then may exit non-zero on its way out; the file decides.
     # The screen is larger than the window so that Xvfb's pointer (at the screen's centre) is
     # not over the window, where it would open a hover tooltip.
-    timeout 300 xvfb-run -a -s "-screen 0 6400x4000x24" "$venv/bin/rerun" \
+    # RUST_LOG=error: no notification toasts (Docker, software rasterizer) over the plots.
+    RUST_LOG=error timeout 300 xvfb-run -a -s "-screen 0 6400x4000x24" "$venv/bin/rerun" \
         "$out/impact-$dim/$dim-edge-repulsion.rrd" --renderer vulkan \
         --window-size 1400x860 --screenshot-to "$png" >"$out/viewer-$dim.log" 2>&1 || true
     if [ ! -s "$png" ]; then

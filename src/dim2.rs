@@ -271,6 +271,15 @@ pub(crate) mod render {
         )
     }
 
+    /// What a 3D eye follows; 2D views are framed by their bounds, so nothing.
+    pub fn focus(
+        _rec: &RecordingStream,
+        _path: &str,
+        _vertices: &[Vector],
+    ) -> RecordingStreamResult<()> {
+        Ok(())
+    }
+
     /// The surface's wireframe: a 2D surface is already drawn as lines, so nothing.
     pub fn wireframe(
         _rec: &RecordingStream,

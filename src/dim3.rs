@@ -294,7 +294,7 @@ pub mod math {
 /// Rerun primitives for 3D (used by the shared recorder).
 #[cfg(feature = "rerun")]
 pub(crate) mod render {
-    use super::math::{Pose, Vector};
+    use super::math::{Pose, Real, Vector};
     use rapier3d::geometry::Shape;
     use rerun::external::re_sdk_types::blueprint::archetypes::EyeControls3D;
     use rerun::external::re_sdk_types::blueprint::components::Eye3DKind;
@@ -321,7 +321,7 @@ pub(crate) mod render {
     ) -> RecordingStreamResult<()> {
         let centre = 0.5 * (lo + hi);
         let radius = (0.5 * (hi - lo).length()).max(0.05);
-        let eye = centre + Vector::new(0.6, 0.5, 1.0).normalize() * (4.0 * radius);
+        let eye = centre + Vector::new(0.6, 0.5, 1.0).normalize() * (2.8 * radius);
         let mut controls = EyeControls3D::new()
             .with_kind(Eye3DKind::Orbital)
             .with_position(p(eye))
@@ -331,6 +331,30 @@ pub(crate) mod render {
             controls = controls.with_tracking_entity(entity);
         }
         rec.log(format!("{view}/EyeControls3D"), &controls)
+    }
+
+    /// What the eye follows: two invisible points (radius 0) at the corners of the box of
+    /// `vertices` grown 1.2 times about its centre. The viewer keeps a followed entity at 1.5
+    /// times its bounding radius; following the surface itself puts its bottom out of view.
+    pub fn focus(
+        rec: &RecordingStream,
+        path: &str,
+        vertices: &[Vector],
+    ) -> RecordingStreamResult<()> {
+        let (lo, hi) = vertices.iter().fold(
+            (
+                Vector::splat(Real::INFINITY),
+                Vector::splat(Real::NEG_INFINITY),
+            ),
+            |(lo, hi), v| (lo.min(*v), hi.max(*v)),
+        );
+        let (centre, half) = (0.5 * (lo + hi), 0.6 * (hi - lo));
+        rec.log(
+            path,
+            &Points3D::new([p(centre - half), p(centre + half)])
+                .with_radii([0.0])
+                .with_colors([Color::from_unmultiplied_rgba(0, 0, 0, 0)]),
+        )
     }
 
     /// Thin lines of a fixed on-screen width (the surface's wireframe).

@@ -17,6 +17,7 @@
 //! | `world/deformables/<name>/contacts/points`, `.../contacts/normals` | last step's contact points and normals | if `contacts` |
 //! | `world/colliders/<index>_<generation>` | the collider's shape (static) and pose (per frame); grey fixed, orange kinematic (bones), blue dynamic | every logged frame |
 //! | `world/deformables/<name>/wireframe` | 3D: the surface's edges as thin dark lines | if `wireframe` |
+//! | `world/deformables/<name>/focus` | 3D: two invisible points, the corners of the surface's box grown 1.2 times about its centre: what the eye follows (the viewer keeps a followed entity at 1.5 times its bounding radius, which for the surface itself is too close to see where it touches) | if `blueprint` |
 //! | `stats/<name>/<metric>` | `Scalars` (each [`METRICS`] entry): `kinetic_energy`, `elastic_energy`, `gravity_energy`, `total_energy` (their sum), `inverted_elements`, `min_volume_ratio`, `max_penetration`, `contacts`, `substeps`, `ms_forces`, `ms_contacts`, `ms_integrate`, `frozen` (0/1), `log_ms` | every logged frame |
 //! | `events/<name>` | `TextLog`: a warning when the body is frozen (why: non-finite state or a blow-up), info when it resumes | when it changes |
 //! | `legend` | `TextDocument` (markdown): what the colours and lines mean, with the colour range | static |
@@ -388,7 +389,7 @@ impl RerunRecorder {
             blueprint::Framing {
                 lo,
                 hi,
-                track: Some(format!("world/deformables/{}/surface", names[0])),
+                track: Some(format!("world/deformables/{}/focus", names[0])),
             }
         } else {
             let (lo, hi) = blueprint::framing_box((lo, hi), boxes, 1);
@@ -580,6 +581,9 @@ impl DeformableLog {
             .map(|&i| self.color(i as usize, body, &quality, options))
             .collect();
         render::surface(rec, &surface_path, &vertices, &self.facets, &colors)?;
+        if options.blueprint {
+            render::focus(rec, &format!("{base}/focus"), &vertices)?;
+        }
         if options.wireframe && !self.surface_edges.is_empty() {
             let segments: Vec<[Vector; 2]> = self
                 .surface_edges
