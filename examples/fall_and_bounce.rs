@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --release --example fall_and_bounce [-- --res 5 --seconds 5 --dt 0.001]
-//! cargo run --release --features rerun --example fall_and_bounce [-- --rrd DIR | --connect [ADDR]] [--log-every N]
+//! cargo run --release --features rerun --example fall_and_bounce [-- --rrd DIR | --connect [ADDR]] [--log-every N] [--no-wireframe]
 //! ```
 //!
 //! With the `rerun` feature every run is logged (every 10th step, or every `--log-every`-th) to
@@ -28,7 +28,11 @@ macro_rules! run_dimension {
             #[cfg(feature = "rerun")]
             let mut recorder = {
                 use sinew::$dim::{RecorderOptions, RerunRecorder};
-                let options = RecorderOptions { every_n_steps: sink::arg("--log-every", 10), ..Default::default() };
+                let options = RecorderOptions {
+                    every_n_steps: sink::arg("--log-every", 10),
+                    wireframe: !std::env::args().any(|a| a == "--no-wireframe"),
+                    ..Default::default()
+                };
                 let made = match $sink {
                     sink::Sink::Folder(dir) => {
                         let file = dir.join(format!("{}-{}.rrd", $label.to_lowercase(), model.name()));
@@ -55,8 +59,10 @@ macro_rules! run_dimension {
                 }
             });
             #[cfg(feature = "rerun")]
-            if let Some(r) = recorder.as_ref() {
-                r.flush();
+            if let Some(r) = recorder.as_mut() {
+                if let Err(e) = r.flush() {
+                    eprintln!("logging failed: {e}");
+                }
             }
             #[cfg(feature = "rerun")]
             let logging = recorder.as_ref().map(|r| (r.seconds_per_frame(), r.frames()));

@@ -91,8 +91,10 @@ macro_rules! run_dimension {
             }
         }
         #[cfg(feature = "rerun")]
-        if let Some(r) = recorder.as_ref() {
-            r.flush();
+        if let Some(r) = recorder.as_mut() {
+            if let Err(e) = r.flush() {
+                eprintln!("logging failed: {e}");
+            }
         }
         let _: Real = 0.0;
     }};

@@ -70,8 +70,10 @@ macro_rules! run_dimension {
                 Err(e) => println!("{:<3} {:<18} failed to build: {e}", $label, model.name()),
             }
             #[cfg(feature = "rerun")]
-            if let Some(r) = recorder.as_ref() {
-                r.flush();
+            if let Some(r) = recorder.as_mut() {
+                if let Err(e) = r.flush() {
+                    eprintln!("logging failed: {e}");
+                }
                 if let Ok(o) = &outcome {
                     let steps = (scene.max_degrees / scene.degrees_per_second / scene.dt).round();
                     println!(

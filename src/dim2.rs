@@ -284,7 +284,8 @@ pub(crate) mod render {
     pub fn wireframe(
         _rec: &RecordingStream,
         _path: &str,
-        _segments: &[[Vector; 2]],
+        _vertices: &[Vector],
+        _strips: &[Vec<u32>],
         _color: Color,
     ) -> RecordingStreamResult<()> {
         Ok(())

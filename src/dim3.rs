@@ -361,12 +361,18 @@ pub(crate) mod render {
     pub fn wireframe(
         rec: &RecordingStream,
         path: &str,
-        segments: &[[Vector; 2]],
+        vertices: &[Vector],
+        strips: &[Vec<u32>],
         color: Color,
     ) -> RecordingStreamResult<()> {
+        let strips = strips.iter().map(|s| {
+            s.iter()
+                .map(|&i| p(vertices[i as usize]))
+                .collect::<Vec<_>>()
+        });
         rec.log(
             path,
-            &LineStrips3D::new(segments.iter().map(|s| [p(s[0]), p(s[1])]))
+            &LineStrips3D::new(strips)
                 .with_colors([color])
                 .with_radii([Radius::new_ui_points(0.6)]),
         )

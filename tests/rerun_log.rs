@@ -89,7 +89,7 @@ macro_rules! fall_to_rrd {
                     frames.push(format!("{{\"step\":{},\"surface\":{}}}", world.steps(), json_vec(&surface)));
                 }
             }
-            recorder.flush();
+            recorder.flush().unwrap();
             drop(recorder);
             assert_eq!(frames.len(), steps.div_ceil(50));
             let json = format!(
@@ -160,7 +160,7 @@ fn several_bodies_get_a_plot_per_metric() {
         world.step();
         recorder.log_world(&world).unwrap();
     }
-    recorder.flush();
+    recorder.flush().unwrap();
     drop(recorder);
     let layout = dir.join("several-layout.json");
     std::fs::write(
@@ -217,7 +217,7 @@ fn a_frozen_body_is_logged_as_a_warning() {
         recorder.log_world(&world).unwrap();
     }
     assert!(world.deformables[h].is_frozen());
-    recorder.flush();
+    recorder.flush().unwrap();
     drop(recorder);
     let py = python();
     let out = Command::new(&py)

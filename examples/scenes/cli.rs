@@ -516,8 +516,10 @@ macro_rules! dimension_runner {
                     }
                 });
                 #[cfg(feature = "rerun")]
-                if let Some(r) = recorder.as_ref() {
-                    r.flush();
+                if let Some(r) = recorder.as_mut() {
+                    if let Err(e) = r.flush() {
+                        eprintln!("logging failed: {e}");
+                    }
                 }
                 result
             }
