@@ -19,7 +19,7 @@ pub mod model;
 mod pipeline;
 mod query;
 #[cfg(feature = "rerun")]
-mod recorder;
+pub mod recorder;
 mod report;
 mod set;
 pub mod snapshot;
