@@ -24,3 +24,4 @@ pub mod dim2;
 #[cfg(feature = "dim3")]
 pub mod dim3;
 pub mod record;
+pub mod reference;
