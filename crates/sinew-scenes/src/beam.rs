@@ -63,10 +63,7 @@ pub fn sag_error(measured: f64, theory: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn close(a: f64, b: f64, rel: f64) -> bool {
-        (a - b).abs() <= rel * b.abs()
-    }
+    use crate::close;
 
     #[test]
     fn tip_sag_matches_a_worked_example() {

@@ -25,3 +25,9 @@ pub mod dim2;
 pub mod dim3;
 pub mod record;
 pub mod reference;
+
+/// `a` within `rel` of `b`, relatively (the closed-form tests of `beam` and `reference`).
+#[cfg(test)]
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * b.abs()
+}

@@ -88,10 +88,7 @@ pub fn hertz_contact_radius(radius: f64, indentation: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn close(a: f64, b: f64, rel: f64) -> bool {
-        (a - b).abs() <= rel * b.abs()
-    }
+    use crate::close;
 
     #[test]
     fn steel_under_100_mpa() {

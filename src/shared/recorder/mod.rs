@@ -191,8 +191,8 @@ pub struct RerunRecorder {
     /// Each collider's pose as last logged.
     poses: HashMap<ColliderHandle, Pose>,
     view_logged: bool,
-    /// The deformables' names the last blueprint was made for.
-    blueprint_for: Vec<String>,
+    /// Deformables came or went since the last blueprint: send it again.
+    layout_stale: bool,
     calls: u64,
     frames: u64,
     log_seconds: f64,
@@ -230,7 +230,7 @@ impl RerunRecorder {
             shapes_logged: HashMap::new(),
             poses: HashMap::new(),
             view_logged: false,
-            blueprint_for: Vec::new(),
+            layout_stale: true,
             calls: 0,
             frames: 0,
             log_seconds: 0.0,
@@ -356,6 +356,7 @@ impl RerunRecorder {
                     .unwrap_or_else(|| format!("d{}", handle.into_raw_parts().0));
                 self.deformables
                     .insert(handle, DeformableLog::new(name, body));
+                self.layout_stale = true;
             }
             let log = self.deformables.get_mut(&handle).expect("inserted above");
             log.log(
@@ -371,8 +372,10 @@ impl RerunRecorder {
                 log.send_stats(&rec)?;
             }
         }
+        let before = self.deformables.len();
         self.deformables
             .retain(|handle, _| deformables.get(*handle).is_some());
+        self.layout_stale |= self.deformables.len() != before;
         if self.options.blueprint {
             self.send_blueprint_if_new(colliders, deformables)?;
         }
@@ -390,18 +393,18 @@ impl RerunRecorder {
         Ok(true)
     }
 
-    /// Sends the layout if the deformables' names changed since the last one sent (and there
-    /// are some): their series names, then the blueprint framed on them.
+    /// Sends the layout if deformables came or went since the last one sent (and there are
+    /// some): their series names, then the blueprint framed on them.
     fn send_blueprint_if_new(
         &mut self,
         colliders: &ColliderSet,
         deformables: &DeformableSet,
     ) -> Result<(), RecorderError> {
-        let mut names: Vec<String> = self.deformables.values().map(|d| d.name.clone()).collect();
-        names.sort_unstable();
-        if names.is_empty() || names == self.blueprint_for {
+        if !self.layout_stale || self.deformables.is_empty() {
             return Ok(());
         }
+        let mut names: Vec<String> = self.deformables.values().map(|d| d.name.clone()).collect();
+        names.sort_unstable();
         let several = names.len() > 1;
         for log in self.deformables.values() {
             for (metric, path) in METRICS.iter().zip(&log.stats) {
@@ -443,7 +446,7 @@ impl RerunRecorder {
             }
         };
         blueprint::send(&self.rec, render::VIEW_CLASS, &names, framing)?;
-        self.blueprint_for = names;
+        self.layout_stale = false;
         Ok(())
     }
 
