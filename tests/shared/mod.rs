@@ -5,6 +5,7 @@ mod cantilever;
 mod contact;
 mod determinism;
 mod elements;
+mod energy;
 mod errors;
 mod fall;
 mod faults;
