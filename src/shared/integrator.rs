@@ -101,7 +101,7 @@ pub enum Integrator {
     /// a constant by O(h·ω) (5–14 % for a 5 % free vibration at the automatic substep of a
     /// 60 Hz step, 1 % at h = 1/600 s), with no trend beyond 0.05 % in 10 s at h = 1/600 s
     /// for any model (`tests/shared/energy.rs`). At the automatic substep nonlinear
-    /// springs, which stiffen as they stretch, can gain: +3.7 % in 10 s for that vibration;
+    /// springs, which stiffen as they shorten, can gain: +3.7 % in 10 s for that vibration;
     /// lower [`PipelineSettings::safety`](super::PipelineSettings::safety) there.
     #[default]
     Explicit,
