@@ -6,7 +6,13 @@
 //! cargo run --release --example chart              # all sweeps (~15 min), writes docs/
 //! cargo run --release --example chart -- --quick   # fewer points, into target/charts
 //! cargo run --release --example chart -- --only fall --out /tmp/charts
+//! # the fall's common reference (rapier's FEM, minutes on two threads), then the charts:
+//! cargo run --release --features sinew-scenes/fem --example chart -- --fresh-reference
 //! ```
+//!
+//! The fall is measured against one common reference for every model
+//! ([`FallReference`], kept in `docs/charts/fall-reference.json`): it is computed when that file
+//! is missing or with `--fresh-reference` (which needs `--features sinew-scenes/fem`).
 //!
 //! Writes `<out>/charts/<metric>.svg`, every point as JSON lines in
 //! `<out>/charts/points.jsonl`, and `<out>/ACCURACY.md` (the Pareto-best points per metric and
@@ -21,8 +27,12 @@ use plotters::prelude::*;
 use serde_json::json;
 use sinew::dim3::math::Real;
 use sinew::dim3::{ElementModel, Integrator, RotationFit, ShapeDamping};
-use sinew_scenes::dim3::metrics::{trajectory_error, uniaxial_volume_change};
-use sinew_scenes::dim3::{CantileverScene, CrushScene, FallScene, RotationErrorScene, Subject};
+use sinew_scenes::dim3::metrics::uniaxial_volume_change;
+use sinew_scenes::dim3::advise::FALL_SECONDS;
+use sinew_scenes::dim3::{
+    CantileverScene, FallReference, FallScene, RotationErrorScene, Subject, Trial,
+    FALL_REFERENCE_PATH,
+};
 
 #[derive(Parser, Debug)]
 #[command(about = "Charts cost against error for every model")]
@@ -33,9 +43,13 @@ struct Args {
     /// Output folder (charts go to <out>/charts).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Only these metrics: fall, crush, sag, rotation.
+    /// Only these metrics: fall, crush, heavy (crush 1000 kg and limb), sag, rotation; `reference` computes the fall's
+    /// reference afresh (and is not part of the default set).
     #[arg(long, num_args = 1..)]
     only: Vec<String>,
+    /// Compute the fall's reference again (needs `--features sinew-scenes/fem`).
+    #[arg(long)]
+    fresh_reference: bool,
 }
 
 /// One run's place on a chart.
@@ -69,9 +83,45 @@ struct Metric {
 
 const FALL: Metric = Metric {
     key: "fall-trajectory",
-    title: "fall: centre-of-mass trajectory error vs the same model at res 9, dt 0.5 ms",
+    title: "fall: centre-of-mass trajectory error vs the common reference (rapier FEM, fine)",
     y: "RMS error / size",
 };
+
+/// The fall's sampling period, s.
+const FALL_EVERY: Real = 0.01;
+
+/// The reference's runs (resolution, dt): its own convergence, the finest last.
+const REFERENCE_GRID: [(usize, Real); 4] = [(9, 0.25e-3), (13, 0.25e-3), (17, 0.5e-3), (17, 0.25e-3)];
+
+/// The fall's common reference: read from `path`, or computed (and written there) when the
+/// file is missing or `fresh` asks.
+fn fall_reference(path: &Path, fresh: bool) -> Result<FallReference, Box<dyn std::error::Error>> {
+    if !fresh {
+        if let Ok(r) = FallReference::load(path) {
+            return Ok(r);
+        }
+    }
+    // rapier's FEM is there only with `--features sinew-scenes/fem`.
+    let Some(subject) = Subject::parse("rapier-fem-neo-hookean", RotationFit::Polar) else {
+        return Err(format!(
+            "{} is missing and the reference is rapier's FEM: run with \
+             `--features sinew-scenes/fem`",
+            path.display()
+        )
+        .into());
+    };
+    let scene = FallScene {
+        seconds: FALL_SECONDS,
+        ..FallScene::default()
+    };
+    let r = FallReference::compute(&scene, subject, &REFERENCE_GRID, FALL_EVERY, 2, progress)?;
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(path, serde_json::to_string(&r.to_json())?)?;
+    Ok(r)
+}
+
 const CRUSH_SHAPE: Metric = Metric {
     key: "crush-shape",
     title: "crush 10 kg and release: shape error after recovery",
@@ -82,6 +132,16 @@ const CRUSH_VOLUME: Metric = Metric {
     title: "static load 10 kg: |ΔV/V − (−(1−2ν)σ/E)|",
     y: "volume error",
 };
+const CRUSH_HEAVY: Metric = Metric {
+    key: "crush-heavy",
+    title: "crush 1000 kg and release: shape error after recovery",
+    y: "shape error / size",
+};
+const LIMB: Metric = Metric {
+    key: "limb",
+    title: "limb (0.1 m spacing) bent to 110°: 1 − smallest cell volume ratio (inverted: failed)",
+    y: "1 − min volume ratio",
+};
 const ROTATION: Metric = Metric {
     key: "rotation",
     title: "rotation-error drop (k/m 1e4): spurious angular acceleration",
@@ -90,7 +150,7 @@ const ROTATION: Metric = Metric {
 
 const SAG: Metric = Metric {
     key: "cantilever-sag",
-    title: "cantilever (10:1, clamped by a bone): |static tip sag / Euler-Bernoulli − 1|",
+    title: "cantilever (10:1, clamped by a bone): |tip sag / (Euler–Bernoulli + shear) − 1|",
     y: "relative sag error",
 };
 
@@ -126,82 +186,69 @@ fn progress(what: &str) {
     eprintln!("[chart] {what}");
 }
 
-/// The fall sweep: each subject at each (res, dt), its centre-of-mass trajectory against the
-/// subject's own finest run.
-fn fall(quick: bool) -> Vec<Point> {
-    // The reference: finer than every point, in resolution and in dt.
-    let (resolutions, dts, seconds, fine_res, fine_dt): (&[usize], &[Real], Real, usize, Real) =
-        if quick {
-            (&[3, 4], &[2.0e-3, 4.0e-3], 1.0, 5, 1.0e-3)
+/// Who runs a sweep: every subject explicitly (rapier's bodies step their own way), and
+/// sinew's models but centroid springs implicitly with each of `sweeps`.
+fn entrants(sweeps: &[usize]) -> Vec<(Subject, Integrator, String)> {
+    let mut out: Vec<_> = Subject::all()
+        .into_iter()
+        .map(|s| (s, Integrator::Explicit, s.name().to_string()))
+        .collect();
+    for &iterations in sweeps {
+        for s in Subject::all() {
+            if matches!(s, Subject::Sinew(m) if m != ElementModel::CentroidSprings) {
+                let label = format!("{} implicit {iterations}", s.name());
+                out.push((s, Integrator::Implicit { iterations }, label));
+            }
+        }
+    }
+    out
+}
+
+/// The steps a sweep takes: `dts` for explicit runs, `implicit` for the implicit step's, `fem`
+/// for rapier's FEM bodies (seconds per simulated second below 4 ms).
+struct Steps<'a> {
+    dts: &'a [Real],
+    implicit: &'a [Real],
+    fem: &'a [Real],
+}
+
+impl Steps<'_> {
+    fn of(&self, subject: Subject, integrator: Integrator) -> &[Real] {
+        if subject.name().starts_with("rapier-fem") {
+            self.fem
+        } else if integrator == Integrator::Explicit {
+            self.dts
         } else {
-            (
-                &[3, 5, 7],
-                &[1.0e-3, 2.0e-3, 4.0e-3, 8.0e-3, 1.0 / 60.0, 1.0 / 30.0],
-                1.5,
-                9,
-                0.5e-3,
-            )
-        };
-    // The implicit step's points: game frame rates, a cheap and a converging sweep count.
-    let (implicit_dts, sweeps): (&[Real], &[usize]) = if quick {
-        (&[1.0 / 60.0], &[2])
-    } else {
-        (&[1.0 / 120.0, 1.0 / 60.0, 1.0 / 30.0], &[2, 10])
-    };
-    let every: Real = 0.01;
+            self.implicit
+        }
+    }
+}
+
+/// Runs `trial(res, dt)` for every entrant at every resolution and step; one point each, the
+/// trial's error as y.
+fn sweep(
+    metric: &'static str,
+    resolutions: &[usize],
+    steps: &Steps,
+    sweeps: &[usize],
+    trial: impl Fn(usize, Real) -> Trial,
+) -> Vec<Point> {
     let mut out = Vec::new();
-    for subject in Subject::all() {
-        let run = |res: usize, dt: Real, integrator: Integrator| {
-            let scene = FallScene {
-                subject,
-                resolution: res,
-                dt,
-                seconds,
-                integrator,
-                ..FallScene::default()
-            };
-            scene.run_sampled(every).expect("the fall scene builds")
-        };
-        progress(&format!("fall {} reference", subject.name()));
-        let (reference_record, reference) = run(fine_res, fine_dt, Integrator::Explicit);
-        // Explicit runs (rapier's bodies are their own), then the implicit step's.
-        let mut runs: Vec<(usize, Real, Integrator, String)> = Vec::new();
+    for (subject, integrator, label) in entrants(sweeps) {
         for &res in resolutions {
-            for &dt in dts {
-                runs.push((res, dt, Integrator::Explicit, subject.name().to_string()));
-            }
-        }
-        if matches!(
-            subject,
-            Subject::Sinew(ElementModel::EdgeRepulsion | ElementModel::ShapeMatching { .. })
-        ) {
-            for &iterations in sweeps {
-                for &res in resolutions {
-                    for &dt in implicit_dts {
-                        let label = format!("{} implicit {iterations}", subject.name());
-                        runs.push((res, dt, Integrator::Implicit { iterations }, label));
-                    }
-                }
-            }
-        }
-        for (res, dt, integrator, label) in runs {
-            {
-                progress(&format!("fall {label} res {res} dt {dt}"));
-                let (r, samples) = run(res, dt, integrator);
-                let failed = r.failure.clone().or_else(|| {
-                    reference_record
-                        .failure
-                        .clone()
-                        .map(|f| format!("reference: {f}"))
-                });
+            for &dt in steps.of(subject, integrator) {
+                progress(&format!("{metric} {label} res {res} dt {dt}"));
+                let (r, error) = trial(res, dt)
+                    .measure(subject, integrator)
+                    .expect("the scene builds");
                 out.push(Point {
-                    metric: FALL.key,
-                    model: label,
+                    metric,
+                    model: label.clone(),
                     res,
                     dt: dt as f64,
                     cost: r.wall_per_sim_s(),
-                    error: trajectory_error(&samples, &reference, 1.0) as f64,
-                    failed,
+                    error: error.unwrap_or(f64::NAN),
+                    failed: r.failure.clone(),
                 });
             }
         }
@@ -209,8 +256,52 @@ fn fall(quick: bool) -> Vec<Point> {
     out
 }
 
-/// The crush sweep: a 10 kg press on the fall cube, held, lifted; the volume under the load
-/// against linear elasticity, the shape after recovery against the rest shape.
+/// The fall: every model's centre-of-mass trajectory against the common `reference`.
+fn fall(quick: bool, reference: &FallReference) -> Vec<Point> {
+    let (resolutions, dts): (&[usize], &[Real]) = if quick {
+        (&[3, 4], &[2.0e-3, 4.0e-3])
+    } else {
+        (
+            &[3, 5, 7],
+            &[1.0e-3, 2.0e-3, 4.0e-3, 8.0e-3, 1.0 / 60.0, 1.0 / 30.0],
+        )
+    };
+    let steps = Steps {
+        dts,
+        implicit: if quick { &[1.0 / 60.0] } else { &[1.0 / 120.0, 1.0 / 60.0, 1.0 / 30.0] },
+        fem: if quick { &[1.0 / 60.0] } else { &[4.0e-3, 8.0e-3, 1.0 / 60.0, 1.0 / 30.0] },
+    };
+    let sweeps: &[usize] = if quick { &[2] } else { &[2, 10] };
+    sweep(FALL.key, resolutions, &steps, sweeps, |res, dt| {
+        Trial::fall(res, dt, Some(reference.clone()))
+    })
+}
+
+/// The reference's own convergence as a markdown table.
+fn reference_table(reference: &FallReference) -> String {
+    let mut s = format!(
+        "The reference is {} on the same cube, material, friction and restitution, sampled \
+         every {} s over {} s; its runs, each against the finest (the last):\n\n\
+         | res | dt (ms) | wall s / sim s (two at once) | bounce apex (m) | error vs finest |\n\
+         |---|---|---|---|---|\n",
+        reference.model, reference.every, reference.seconds
+    );
+    for (r, e) in reference.convergence(1.0) {
+        let _ = writeln!(
+            s,
+            "| {} | {:.2} | {:.1} | {} | {:.2e} |",
+            r.resolution,
+            r.dt * 1e3,
+            r.wall_per_sim_s,
+            r.apex.map_or("-".into(), |a| format!("{a:.3}")),
+            e
+        );
+    }
+    s
+}
+
+/// The crush: a 10 kg press on the fall cube, held, lifted; the volume under the load against
+/// linear elasticity, the shape after recovery against the rest shape.
 fn crush(quick: bool) -> Vec<Point> {
     let (resolutions, dts): (&[usize], &[Real]) = if quick {
         (&[3], &[2.0e-3])
@@ -223,23 +314,14 @@ fn crush(quick: bool) -> Vec<Point> {
         for &res in resolutions {
             for &dt in dts {
                 progress(&format!("crush {} res {res} dt {dt}", subject.name()));
-                let cube = FallScene {
-                    subject,
-                    resolution: res,
-                    dt,
-                    ..FallScene::default()
+                let trial = Trial::crush(res, dt, mass);
+                let Trial::Crush(scene) = &trial else {
+                    unreachable!()
                 };
-                let scene = CrushScene {
-                    cube,
-                    mass,
-                    settle: 0.5,
-                    ramp: 0.5,
-                    hold: 1.5,
-                    lift: 0.5,
-                    recover: if quick { 0.5 } else { 1.0 },
-                    guided: true,
-                };
-                let r = scene.run().expect("the crush scene builds");
+                let cube = scene.cube;
+                let (r, shape) = trial
+                    .measure(subject, Integrator::Explicit)
+                    .expect("the crush scene builds");
                 let stress = mass * 9.81 / (cube.size * cube.size);
                 let theory =
                     uniaxial_volume_change(stress, cube.young_modulus, cube.poisson_ratio) as f64;
@@ -249,7 +331,7 @@ fn crush(quick: bool) -> Vec<Point> {
                     res,
                     dt: dt as f64,
                     cost: r.wall_per_sim_s(),
-                    error: r.shape_error.unwrap_or(f64::NAN),
+                    error: shape.unwrap_or(f64::NAN),
                     failed: r.failure.clone(),
                 };
                 let volume = r
@@ -265,6 +347,39 @@ fn crush(quick: bool) -> Vec<Point> {
         }
     }
     out
+}
+
+/// The heavy crush (1000 kg, a load near E on the cube's top) and the limb bent to 110°:
+/// every model under both integrators, down to game steps — the runs `scenes advise` picks
+/// from.
+fn heavy(quick: bool) -> (Vec<Point>, Vec<Point>) {
+    let dts: &[Real] = if quick {
+        &[1.0 / 60.0]
+    } else {
+        &[1.0e-2, 1.0 / 60.0, 1.0 / 30.0]
+    };
+    let steps = Steps {
+        dts,
+        implicit: dts,
+        fem: if quick { &[1.0 / 60.0] } else { &[1.0 / 60.0, 1.0 / 30.0] },
+    };
+    let sweeps: &[usize] = if quick { &[2] } else { &[2, 10] };
+    let crush = sweep(
+        CRUSH_HEAVY.key,
+        if quick { &[3] } else { &[3, 5] },
+        &steps,
+        sweeps,
+        |res, dt| Trial::crush(res, dt, 1000.0),
+    );
+    // The limb's "resolution" is its nodes along it (spacing 2 m / (n − 1)).
+    let limb = sweep(
+        LIMB.key,
+        &[if quick { 11 } else { 21 }],
+        &steps,
+        sweeps,
+        |n, dt| Trial::limb(2.0 / (n - 1) as Real, dt),
+    );
+    (crush, limb)
 }
 
 /// The rotation-error drop for each of the shape-based element's fits, at several steps per
@@ -453,10 +568,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let charts = out.join("charts");
     std::fs::create_dir_all(&charts)?;
     let wanted = |name: &str| args.only.is_empty() || args.only.iter().any(|o| o == name);
+    let fresh = args.fresh_reference && !args.only.iter().any(|o| o == "reference");
 
     let mut sections: Vec<(&Metric, Vec<Point>)> = Vec::new();
+    let mut preamble = String::new();
+    if args.only.iter().any(|o| o == "reference") {
+        let reference = fall_reference(Path::new(FALL_REFERENCE_PATH), true)?;
+        println!("{}", reference_table(&reference));
+    }
     if wanted("fall") {
-        sections.push((&FALL, fall(args.quick)));
+        let reference = fall_reference(Path::new(FALL_REFERENCE_PATH), fresh)?;
+        preamble = reference_table(&reference);
+        sections.push((&FALL, fall(args.quick, &reference)));
     }
     if wanted("crush") {
         let points = crush(args.quick);
@@ -465,6 +588,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .partition(|p| p.metric == CRUSH_VOLUME.key);
         sections.push((&CRUSH_SHAPE, shape));
         sections.push((&CRUSH_VOLUME, volume));
+    }
+    if wanted("heavy") {
+        let (crush, limb) = heavy(args.quick);
+        sections.push((&CRUSH_HEAVY, crush));
+        sections.push((&LIMB, limb));
     }
     if wanted("sag") {
         sections.push((&SAG, sag(args.quick)));
@@ -495,9 +623,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let _ = write!(
             doc,
-            "## {}\n\n![{}](charts/{}.svg)\n\nPareto-best points (no other point is both \
+            "## {}\n\n{}![{}](charts/{}.svg)\n\nPareto-best points (no other point is both \
              cheaper and more accurate):\n\n{}\nFailed runs:\n\n{}\n",
             metric.title,
+            if metric.key == FALL.key {
+                format!("{preamble}\n")
+            } else {
+                String::new()
+            },
             metric.key,
             metric.key,
             t,

@@ -3,8 +3,13 @@
 //!
 //! ```text
 //! cargo run --release --example fall_and_bounce [-- --res 5 --seconds 5 --dt 0.001]
+//! cargo run --release --example fall_and_bounce -- --advise --dt 0.0166667
 //! cargo run --release --features rerun --example fall_and_bounce [-- --rrd DIR | --connect [ADDR]] [--log-every N] [--no-wireframe]
 //! ```
+//!
+//! `--advise` runs only the model and integrator that `sinew_scenes::dim3::advise` picks for
+//! this very fall (the cheapest within 5 % of the cube's size of the common fall reference in
+//! 3D; 2D has no reference and is judged on stability alone), after printing every candidate.
 //!
 //! With the `rerun` feature every run is logged (every 10th step, or every `--log-every`-th) to
 //! `out/fall_and_bounce/<dim>-<model>.rrd`, or to `--rrd DIR`, or streamed to a viewer with
@@ -23,8 +28,53 @@ macro_rules! run_dimension {
             dt: sink::arg("--dt", 1e-3),
             ..FallScene::default()
         };
-        for model in ElementModel::ALL {
-            let scene = FallScene { subject: model.into(), ..base };
+        // Every model explicitly, or with `--advise` only the cheapest model and integrator
+        // that stays inside the trial's bounds on this very scene.
+        let picks: Vec<(ElementModel, sinew::$dim::Integrator)> = if sink::flag("--advise") {
+            use sinew_scenes::$dim::advise::{advise, candidates, Trial};
+            let trial = Trial::Fall {
+                    scene: base,
+                    reference: sinew_scenes::$dim::FallReference::load(std::path::Path::new(
+                        sinew_scenes::$dim::FALL_REFERENCE_PATH,
+                    ))
+                    .ok(),
+                };
+            match advise(&trial, trial.default_bounds(), &candidates(), |_| {}) {
+                Ok(advice) => {
+                    for c in &advice.candidates {
+                        println!(
+                            "{:<3} advise: {:<32} wall/sim {:.4} s  error {}  {}",
+                            $label,
+                            c.label(),
+                            c.cost(),
+                            c.error.map_or("—".to_string(), |e| format!("{e:.2e}")),
+                            c.rejected.as_deref().unwrap_or("passes")
+                        );
+                    }
+                    match advice.choice() {
+                        Some(c) => {
+                            println!("{:<3} advise: cheapest that passes: {}", $label, c.label());
+                            vec![(c.model, c.integrator)]
+                        }
+                        None => {
+                            println!("{:<3} advise: no model passes; running edge-repulsion", $label);
+                            vec![(ElementModel::EdgeRepulsion, sinew::$dim::Integrator::Explicit)]
+                        }
+                    }
+                }
+                Err(e) => {
+                    println!("{:<3} advise failed: {e}", $label);
+                    Vec::new()
+                }
+            }
+        } else {
+            ElementModel::ALL
+                .into_iter()
+                .map(|m| (m, sinew::$dim::Integrator::Explicit))
+                .collect()
+        };
+        for (model, integrator) in picks {
+            let scene = FallScene { subject: model.into(), integrator, ..base };
             #[cfg(feature = "rerun")]
             let mut recorder = {
                 use sinew::$dim::{RecorderOptions, RerunRecorder};

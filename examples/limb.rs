@@ -4,8 +4,13 @@
 //!
 //! ```text
 //! cargo run --release --example limb [-- --spacing 0.1 --young 1e4]
+//! cargo run --release --example limb -- --advise
 //! cargo run --release --features rerun --example limb [-- --rrd DIR | --connect [ADDR]]
 //! ```
+//!
+//! `--advise` runs only the model and integrator that `sinew_scenes::dim3::advise` picks for
+//! this very limb (the cheapest that reaches 110° with no cell inverted), after printing every
+//! candidate.
 //!
 //! With the `rerun` feature every run is logged at every step (attachments included) to
 //! `out/limb/<dim>-<model>.rrd` and the logging cost per frame is printed beside the step cost.
@@ -22,8 +27,47 @@ macro_rules! run_dimension {
             young_modulus: sink::arg("--young", 1e4),
             ..LimbScene::default()
         };
-        for model in ElementModel::ALL {
-            let scene = LimbScene { subject: model.into(), ..base };
+        // Every model explicitly, or with `--advise` only the cheapest model and integrator
+        // that stays inside the trial's bounds on this very scene.
+        let picks: Vec<(ElementModel, sinew::$dim::Integrator)> = if sink::flag("--advise") {
+            use sinew_scenes::$dim::advise::{advise, candidates, Trial};
+            let trial = Trial::Limb(base);
+            match advise(&trial, trial.default_bounds(), &candidates(), |_| {}) {
+                Ok(advice) => {
+                    for c in &advice.candidates {
+                        println!(
+                            "{:<3} advise: {:<32} wall/sim {:.4} s  error {}  {}",
+                            $label,
+                            c.label(),
+                            c.cost(),
+                            c.error.map_or("—".to_string(), |e| format!("{e:.2e}")),
+                            c.rejected.as_deref().unwrap_or("passes")
+                        );
+                    }
+                    match advice.choice() {
+                        Some(c) => {
+                            println!("{:<3} advise: cheapest that passes: {}", $label, c.label());
+                            vec![(c.model, c.integrator)]
+                        }
+                        None => {
+                            println!("{:<3} advise: no model passes; running edge-repulsion", $label);
+                            vec![(ElementModel::EdgeRepulsion, sinew::$dim::Integrator::Explicit)]
+                        }
+                    }
+                }
+                Err(e) => {
+                    println!("{:<3} advise failed: {e}", $label);
+                    Vec::new()
+                }
+            }
+        } else {
+            ElementModel::ALL
+                .into_iter()
+                .map(|m| (m, sinew::$dim::Integrator::Explicit))
+                .collect()
+        };
+        for (model, integrator) in picks {
+            let scene = LimbScene { subject: model.into(), integrator, ..base };
             #[cfg(feature = "rerun")]
             let mut recorder = {
                 use sinew::$dim::{RecorderOptions, RerunRecorder};

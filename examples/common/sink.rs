@@ -84,3 +84,8 @@ pub fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
 }
+
+/// Whether the command line has the flag `name`.
+pub fn flag(name: &str) -> bool {
+    std::env::args().any(|a| a == name)
+}

@@ -41,6 +41,21 @@ pub enum Scene {
     /// A sausage folded double on a table, self contact on (`--self-contact off` to compare);
     /// `--seconds` is the fold and the hold together.
     Fold,
+    /// The cheapest sinew model and integrator inside the bounds, for each `--trial` (fall,
+    /// limb, crush; default all three) at `--res` and `--dt` (default 1/60 s), crush under
+    /// `--mass` (default 1000 kg); `--max-error`, `--min-volume` set the bounds.
+    Advise,
+}
+
+/// The trials of `scenes advise`.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TrialArg {
+    /// The fall cube against the common fall reference.
+    Fall,
+    /// The limb bent to 110°.
+    Limb,
+    /// The cube crushed by `--mass` and released.
+    Crush,
 }
 
 /// sinew's integrators.
@@ -123,6 +138,16 @@ pub struct Args {
     /// One JSON object per line per run instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// The trials of `advise` (default: fall limb crush).
+    #[arg(long, value_enum, num_args = 1..)]
+    pub trial: Vec<TrialArg>,
+    /// `advise`: the largest error allowed (default: the trial's own, see
+    /// `sinew_scenes::dim3::advise`).
+    #[arg(long)]
+    pub max_error: Option<f64>,
+    /// `advise`: the smallest cell volume ratio allowed (default 0: no inverted cell).
+    #[arg(long)]
+    pub min_volume: Option<f64>,
 }
 
 /// Parses `args` (the first is the program name), runs, and writes the output to `out`.
@@ -141,6 +166,15 @@ where
         args.dim.clone()
     };
     let mut records = Vec::new();
+    if args.scene == Scene::Advise {
+        for dim in dims {
+            records.extend(match dim {
+                2 => dim2::advise(&args, out)?,
+                _ => dim3::advise(&args, out)?,
+            });
+        }
+        return Ok(records);
+    }
     let mut header = false;
     for dim in dims {
         let mut emit = |r: Record| -> Result<(), String> {
@@ -292,6 +326,7 @@ fn table_header(scene: Scene) -> String {
             " bodies  inside mm  at rest mm  E gain   speed  rest m  pairs ms/s"
         }
         Scene::Fold => "  self mm",
+        Scene::Advise => "",
     };
     format!(
         "dim {:<23} {:>5} {:>6} {:>6} {:>9} {:>9} {:>9} {:>7}{extra}  flags",
@@ -333,6 +368,7 @@ fn table_row(scene: Scene, r: &Record) -> String {
             opt(r.pairs_wall_s.map(|p| p * 1e3 / r.sim_s.max(1e-9)), 2)
         ),
         Scene::Fold => format!("  {:>7}", opt(r.max_self_penetration.map(|p| p * 1e3), 3)),
+        Scene::Advise => String::new(),
         Scene::Crush => format!(
             "  {:>9}  {:>6}  {:>9}  {:>10}",
             opt(r.mass, 0),
@@ -406,7 +442,7 @@ fn table_row(scene: Scene, r: &Record) -> String {
 macro_rules! dimension_runner {
     ($module:ident, $dim:ident) => {
         mod $module {
-            use super::{Args, IntegratorArg, Progress, Scene, Switch};
+            use super::{Args, IntegratorArg, Progress, Scene, Switch, TrialArg};
             use sinew::$dim::math::Real;
             use sinew::$dim::Integrator;
             use sinew::$dim::{DeformableWorld, ElementModel, RotationFit};
@@ -522,6 +558,108 @@ macro_rules! dimension_runner {
                     }
                 }
                 result
+            }
+
+            /// `scenes advise`: each trial's candidates as a table (or JSON lines), then the
+            /// pick; returns the candidates' records.
+            pub fn advise(
+                args: &Args,
+                out: &mut dyn std::io::Write,
+            ) -> Result<Vec<Record>, String> {
+                use sinew_scenes::$dim::advise::{advise, candidates, Trial};
+                use sinew_scenes::$dim::{FallReference, FALL_REFERENCE_PATH};
+                let dim = sinew::$dim::math::DIM;
+                let dt = args.dt.unwrap_or(1.0 / 60.0) as Real;
+                let trials = if args.trial.is_empty() {
+                    vec![TrialArg::Fall, TrialArg::Limb, TrialArg::Crush]
+                } else {
+                    args.trial.clone()
+                };
+                let w = |out: &mut dyn std::io::Write, line: String| {
+                    writeln!(out, "{line}").map_err(|e| e.to_string())
+                };
+                let mut records = Vec::new();
+                for t in trials {
+                    let trial = match t {
+                        TrialArg::Fall => {
+                            let reference =
+                                FallReference::load(std::path::Path::new(FALL_REFERENCE_PATH));
+                            if let Err(e) = &reference {
+                                eprintln!("no fall reference ({e}): the fall is judged on stability alone");
+                            }
+                            Trial::fall(args.res.unwrap_or(5), dt, reference.ok())
+                        }
+                        TrialArg::Limb => Trial::limb(
+                            args.res.map_or(0.1, |n| 2.0 / (n.max(2) - 1) as Real),
+                            dt,
+                        ),
+                        TrialArg::Crush => Trial::crush(
+                            args.res.unwrap_or(5),
+                            dt,
+                            args.mass.first().map_or(1000.0, |m| *m as Real),
+                        ),
+                    };
+                    let mut bounds = trial.default_bounds();
+                    if let Some(e) = args.max_error {
+                        bounds.max_error = e;
+                    }
+                    if let Some(v) = args.min_volume {
+                        bounds.min_volume_ratio = v;
+                    }
+                    let advice = advise(&trial, bounds, &candidates(), |what| {
+                        eprintln!("[advise {dim}D] {what}")
+                    })
+                    .map_err(|e| e.to_string())?;
+                    if !args.json {
+                        w(out, format!(
+                            "advise {} {dim}D, dt {:.2} ms: error = {} (at most {}), smallest volume ratio at least {}",
+                            advice.trial, dt * 1e3, trial.error_name(), bounds.max_error, bounds.min_volume_ratio
+                        ))?;
+                        w(out, format!(
+                            "  {:<34} {:>9} {:>10} {:>8}  verdict",
+                            "model and integrator", "wall/sim", "error", "min vol"
+                        ))?;
+                    }
+                    for (i, c) in advice.candidates.iter().enumerate() {
+                        let chosen = advice.chosen == Some(i);
+                        if args.json {
+                            let mut v = super::to_json(&c.record);
+                            v["advise"] = serde_json::json!({
+                                "trial": advice.trial,
+                                "candidate": c.label(),
+                                "error": c.error,
+                                "max_error": bounds.max_error,
+                                "min_volume_ratio": bounds.min_volume_ratio,
+                                "rejected": c.rejected,
+                                "chosen": chosen,
+                            });
+                            w(out, v.to_string())?;
+                        } else {
+                            w(out, format!(
+                                "  {:<34} {:>9.4} {:>10} {:>+8.3}  {}{}",
+                                c.label(),
+                                c.cost(),
+                                c.error.map_or("—".to_string(), |e| format!("{e:.3e}")),
+                                c.record.min_vol_ratio,
+                                c.rejected.as_deref().unwrap_or("passes"),
+                                if chosen { "  <- cheapest that passes" } else { "" }
+                            ))?;
+                        }
+                    }
+                    if !args.json {
+                        w(out, match advice.choice() {
+                            Some(c) => format!(
+                                "  => {}: {:.4} wall s per simulated s, error {}\n",
+                                c.label(),
+                                c.cost(),
+                                c.error.map_or("—".to_string(), |e| format!("{e:.3e}"))
+                            ),
+                            None => "  => no candidate stays inside the bounds\n".to_string(),
+                        })?;
+                    }
+                    records.extend(advice.candidates.into_iter().map(|c| c.record));
+                }
+                Ok(records)
             }
 
             pub fn run(
@@ -716,7 +854,7 @@ macro_rules! dimension_runner {
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
                         }
                         // Run above: it has one subject of its own.
-                        Scene::RotationError => Vec::new(),
+                        Scene::RotationError | Scene::Advise => Vec::new(),
                     };
                     for r in records {
                         emit(r)?;

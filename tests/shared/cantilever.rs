@@ -1,4 +1,5 @@
-//! The cantilever: a clamped beam's static sag against Euler–Bernoulli (issue 6, acceptance 4).
+//! The cantilever: a clamped beam's static sag against Euler–Bernoulli with Timoshenko's shear
+//! share (issues 6 and 17).
 
 use crate::dim::math::Real;
 use crate::dim::BuildError;
@@ -14,8 +15,13 @@ fn scene_theory_is_the_closed_form_for_a_rectangle() {
         s.young_modulus as f64,
         s.thickness as f64,
     );
-    let expected = 3.0 * rho * g * l.powi(4) / (2.0 * e * h * h);
+    // Euler–Bernoulli, δ = 3 ρ g L⁴ / (2 E h²), and Timoshenko's shear share
+    // 2(1 + ν)/(3κ)·(h/L)² with κ = 5/6: 1.04 % at h/L = 0.1, ν = 0.3.
+    let bending = 3.0 * rho * g * l.powi(4) / (2.0 * e * h * h);
+    let nu = s.poisson_ratio as f64;
+    let expected = bending * (1.0 + 2.0 * (1.0 + nu) / 2.5 * (h / l).powi(2));
     assert!((s.theory_sag() - expected).abs() < 1e-9 * expected);
+    assert!((expected / bending - 1.0 - 0.0104).abs() < 1e-4);
     // The default keeps linear theory fair: the sag is 1–3 % of the length.
     let ratio = s.theory_sag() / l;
     assert!((0.01..=0.03).contains(&ratio), "sag/L = {ratio}");

@@ -19,10 +19,12 @@
 //! | [`StackScene`], [`PileScene`], [`SqueezeScene`] | a cell inverts, or bodies rest inside each other by over 1 % of their size | — |
 //! | [`FoldScene`] | the surface passes into itself (over 1 % of a cell) or a cell inverts | — |
 
+pub mod advise;
 mod ball;
 mod cantilever;
 mod crush;
 mod fall;
+mod fall_reference;
 mod flock;
 mod fold;
 mod limb;
@@ -36,10 +38,12 @@ pub mod testing;
 
 pub use crate::beam::{euler_bernoulli_tip_sag, sag_error};
 pub use crate::record::{Record, Spread};
+pub use advise::{advise, Advice, Bounds, Candidate, Trial};
 pub use ball::BallScene;
 pub use cantilever::{CantileverScene, SETTLED_WOBBLE};
 pub use crush::{CrushScene, CRUSH_MASSES};
 pub use fall::{dt_sweep, FallScene, DT_SWEEP_MS};
+pub use fall_reference::{FallReference, ReferenceRun, FALL_REFERENCE_PATH};
 pub use flock::{PileScene, SqueezeScene, StackScene};
 pub use fold::FoldScene;
 pub use limb::LimbScene;
