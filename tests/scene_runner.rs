@@ -377,3 +377,64 @@ fn the_stretch_scene_measures_poisson_s_ratio() {
     // the lattice's own 0.2.
     assert!(nu > 0.35 && nu < 0.5, "{nu}");
 }
+
+/// `scenes advise` as JSON lines: one per candidate, the record's keys plus `advise`.
+fn advise(args: &[&str]) -> Vec<Value> {
+    let mut argv = vec!["scenes", "advise", "--json"];
+    argv.extend_from_slice(args);
+    let mut out = Vec::new();
+    let records = cli::run(argv.clone(), &mut out).unwrap_or_else(|e| panic!("{argv:?}: {e}"));
+    let text = String::from_utf8(out).expect("utf-8 output");
+    let lines: Vec<Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect();
+    assert_eq!(lines.len(), records.len(), "one line per candidate");
+    lines
+}
+
+#[test]
+fn advise_picks_the_cheapest_candidate_inside_the_bounds() {
+    let lines = advise(&[
+        "--dim", "2", "--trial", "crush", "--res", "3", "--mass", "10",
+    ]);
+    // Five models explicitly, four implicitly with 2 and with 10 sweeps.
+    assert_eq!(lines.len(), 13);
+    let passing: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["advise"]["rejected"].is_null())
+        .collect();
+    for l in &lines {
+        let a = &l["advise"];
+        let (error, bound) = (a["error"].as_f64(), a["max_error"].as_f64().unwrap());
+        let inside = !l["failed"].as_bool().unwrap()
+            && l["min_vol_ratio"].as_f64().unwrap() >= a["min_volume_ratio"].as_f64().unwrap()
+            && error.is_some_and(|e| e <= bound);
+        assert_eq!(a["rejected"].is_null(), inside, "{l}");
+    }
+    let chosen: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["advise"]["chosen"] == true)
+        .collect();
+    assert_eq!(chosen.len(), 1, "10 kg on a 2D cube: some model passes");
+    let cost = |l: &Value| l["wall_per_sim_s"].as_f64().unwrap();
+    assert!(chosen[0]["advise"]["rejected"].is_null());
+    assert!(passing.iter().all(|l| cost(chosen[0]) <= cost(l)));
+
+    // No shape comes back exactly: with a zero error bound nothing passes, nothing is picked.
+    let strict = advise(&[
+        "--dim",
+        "2",
+        "--trial",
+        "crush",
+        "--res",
+        "3",
+        "--mass",
+        "10",
+        "--max-error",
+        "0",
+    ]);
+    assert!(strict
+        .iter()
+        .all(|l| l["advise"]["chosen"] == false && l["advise"]["rejected"].as_str().is_some()));
+}
