@@ -163,7 +163,7 @@ fn check(motion: &str, spin: AngVector, stretch: Real) {
             e.drift,
             e.peak
         );
-        if !(e.drift <= DRIFT) {
+        if e.drift.is_nan() || e.drift > DRIFT {
             failed.push(format!("{} {integrator:?}: {e:?}", model.name()));
         }
     }

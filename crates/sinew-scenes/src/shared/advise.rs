@@ -264,14 +264,15 @@ pub fn rejection(record: &Record, error: Option<f64>, bounds: &Bounds) -> Option
     if let Some(f) = &record.failure {
         return Some(f.clone());
     }
-    if !(record.min_vol_ratio >= bounds.min_volume_ratio) {
+    // Written so that NaN is out of bounds.
+    if record.min_vol_ratio.is_nan() || record.min_vol_ratio < bounds.min_volume_ratio {
         return Some(format!(
             "volume ratio {:.3} below {}",
             record.min_vol_ratio, bounds.min_volume_ratio
         ));
     }
     match error {
-        Some(e) if !(e <= bounds.max_error) => {
+        Some(e) if e.is_nan() || e > bounds.max_error => {
             Some(format!("error {e:.3e} over {:.3e}", bounds.max_error))
         }
         _ => None,
