@@ -30,8 +30,8 @@ use sinew::dim3::{ElementModel, Integrator, RotationFit, ShapeDamping};
 use sinew_scenes::dim3::advise::FALL_SECONDS;
 use sinew_scenes::dim3::metrics::uniaxial_volume_change;
 use sinew_scenes::dim3::{
-    CantileverScene, FallReference, FallScene, RotationErrorScene, Subject, Trial,
-    FALL_REFERENCE_PATH,
+    CantileverScene, FallReference, FallScene, Record, RotationErrorScene, StretchScene, Subject,
+    Trial, VibrationScene, FALL_REFERENCE_PATH,
 };
 
 #[derive(Parser, Debug)]
@@ -43,7 +43,8 @@ struct Args {
     /// Output folder (charts go to <out>/charts).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Only these metrics: fall, crush, heavy (crush 1000 kg and limb), sag, rotation; `reference` computes the fall's
+    /// Only these metrics: fall, crush, heavy (crush 1000 kg and limb), vibration, stretch, sag,
+    /// rotation; `reference` computes the fall's
     /// reference afresh (and is not part of the default set).
     #[arg(long, num_args = 1..)]
     only: Vec<String>,
@@ -143,6 +144,21 @@ const LIMB: Metric = Metric {
     title: "limb bent to 110°: 1 − smallest cell volume ratio (inverted runs: failed)",
     y: "1 − min volume ratio",
 };
+const FREQUENCY: Metric = Metric {
+    key: "vibration-frequency",
+    title: "free bar (10:1) ringing: |first axial frequency / beam theory − 1|",
+    y: "relative frequency error",
+};
+const DAMPING: Metric = Metric {
+    key: "vibration-damping",
+    title: "free bar ringing: |damping ratio of its decay / the ratio asked for (0.05) − 1|",
+    y: "relative damping error",
+};
+const STRETCH: Metric = Metric {
+    key: "stretch-poisson",
+    title: "bar pulled 2 %: |Poisson's ratio measured − 0.3|",
+    y: "|ν measured − ν|",
+};
 const ROTATION: Metric = Metric {
     key: "rotation",
     title: "rotation-error drop (k/m 1e4): spurious angular acceleration",
@@ -234,14 +250,33 @@ fn sweep(
     sweeps: &[usize],
     trial: impl Fn(usize, Real) -> Trial,
 ) -> Vec<Point> {
+    sweep_with(
+        metric,
+        resolutions,
+        steps,
+        sweeps,
+        |res, dt, subject, integrator| {
+            trial(res, dt)
+                .measure(subject, integrator)
+                .expect("the scene builds")
+        },
+    )
+}
+
+/// As [`sweep`], with `run(res, dt, subject, integrator)` giving the record and the error.
+fn sweep_with(
+    metric: &'static str,
+    resolutions: &[usize],
+    steps: &Steps,
+    sweeps: &[usize],
+    run: impl Fn(usize, Real, Subject, Integrator) -> (Record, Option<f64>),
+) -> Vec<Point> {
     let mut out = Vec::new();
     for (subject, integrator, label) in entrants(sweeps) {
         for &res in resolutions {
             for &dt in steps.of(subject, integrator) {
                 progress(&format!("{metric} {label} res {res} dt {dt}"));
-                let (r, error) = trial(res, dt)
-                    .measure(subject, integrator)
-                    .expect("the scene builds");
+                let (r, error) = run(res, dt, subject, integrator);
                 out.push(Point {
                     metric,
                     model: label.clone(),
@@ -407,6 +442,97 @@ fn heavy(quick: bool) -> (Vec<Point>, Vec<Point>) {
         |n, dt| Trial::limb(2.0 / (n - 1) as Real, dt),
     );
     (crush, limb)
+}
+
+/// The free bar's ringing: its first axial frequency against beam theory and its decay
+/// against the damping ratio asked for (two charts from the same runs).
+fn vibration(quick: bool) -> (Vec<Point>, Vec<Point>) {
+    let dts: &[Real] = if quick {
+        &[1.0 / 60.0]
+    } else {
+        &[1.0e-3, 4.0e-3, 1.0 / 60.0, 1.0 / 30.0]
+    };
+    let steps = Steps {
+        dts,
+        implicit: if quick {
+            &[1.0 / 60.0]
+        } else {
+            &[1.0 / 60.0, 1.0 / 30.0]
+        },
+        fem: if quick {
+            &[1.0 / 60.0]
+        } else {
+            &[4.0e-3, 1.0 / 60.0, 1.0 / 30.0]
+        },
+    };
+    let sweeps: &[usize] = if quick { &[2] } else { &[2, 10] };
+    let damping = std::cell::RefCell::new(Vec::new());
+    let frequency = sweep_with(
+        FREQUENCY.key,
+        if quick { &[2] } else { &[2, 3, 4] },
+        &steps,
+        sweeps,
+        |res, dt, subject, integrator| {
+            let scene = VibrationScene {
+                subject,
+                resolution: res,
+                dt,
+                integrator,
+                ..VibrationScene::default()
+            };
+            let r = scene.run().expect("the bar builds");
+            let asked = scene.damping_ratio as f64;
+            damping
+                .borrow_mut()
+                .push(r.measured_damping_ratio.map(|z| (z / asked - 1.0).abs()));
+            let e = r
+                .measured_frequency
+                .zip(r.theory_frequency)
+                .map(|(f, t)| (f / t - 1.0).abs());
+            (r, e)
+        },
+    );
+    let damping: Vec<Point> = frequency
+        .iter()
+        .zip(damping.into_inner())
+        .map(|(p, e)| Point {
+            metric: DAMPING.key,
+            error: e.unwrap_or(f64::NAN),
+            ..p.clone()
+        })
+        .collect();
+    (frequency, damping)
+}
+
+/// The bar pulled 2 %: Poisson's ratio measured against the one asked for (0.3). Its
+/// resolution is the nodes across the 1 m bar.
+fn stretch(quick: bool) -> Vec<Point> {
+    let dts: &[Real] = &[1.0 / 60.0, 1.0 / 30.0];
+    let steps = Steps {
+        dts,
+        implicit: dts,
+        fem: dts,
+    };
+    let sweeps: &[usize] = if quick { &[2] } else { &[2, 10] };
+    sweep_with(
+        STRETCH.key,
+        if quick { &[3] } else { &[3, 5] },
+        &steps,
+        sweeps,
+        |res, dt, subject, integrator| {
+            let scene = StretchScene {
+                subject,
+                spacing: 1.0 / (res - 1) as Real,
+                dt,
+                integrator,
+                ..StretchScene::default()
+            };
+            let r = scene.run().expect("the bar builds");
+            let asked = scene.poisson_ratio as f64;
+            let e = r.measured_poisson.map(|nu| (nu - asked).abs());
+            (r, e)
+        },
+    )
 }
 
 /// The rotation-error drop for each of the shape-based element's fits, at several steps per
@@ -620,6 +746,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (crush, limb) = heavy(args.quick);
         sections.push((&CRUSH_HEAVY, crush));
         sections.push((&LIMB, limb));
+    }
+    if wanted("vibration") {
+        let (frequency, damping) = vibration(args.quick);
+        sections.push((&FREQUENCY, frequency));
+        sections.push((&DAMPING, damping));
+    }
+    if wanted("stretch") {
+        sections.push((&STRETCH, stretch(args.quick)));
     }
     if wanted("sag") {
         sections.push((&SAG, sag(args.quick)));

@@ -53,6 +53,9 @@ const KEYS: &[(&str, &str)] = &[
     ("final_speed", "f?"),
     ("pairs_wall_s", "f?"),
     ("measured_poisson", "f?"),
+    ("measured_frequency", "f?"),
+    ("theory_frequency", "f?"),
+    ("measured_damping_ratio", "f?"),
     ("sag", "f?"),
     ("sag_theory", "f?"),
     ("sag_error", "f?"),
@@ -437,4 +440,21 @@ fn advise_picks_the_cheapest_candidate_inside_the_bounds() {
     assert!(strict
         .iter()
         .all(|l| l["advise"]["chosen"] == false && l["advise"]["rejected"].as_str().is_some()));
+}
+
+#[test]
+fn the_vibration_scene_measures_frequency_and_damping() {
+    let lines = run(&["vibration", "--res", "2", "--model", "edge-repulsion"]);
+    assert_eq!(lines.len(), 2, "both dimensions");
+    for l in &lines {
+        assert_eq!(l["scene"], "vibration");
+        let (f, theory) = (
+            l["measured_frequency"].as_f64().unwrap(),
+            l["theory_frequency"].as_f64().unwrap(),
+        );
+        // √(E/ρ)/2L for the default bar: √10 / 2 Hz.
+        assert!((theory - 10f64.sqrt() / 2.0).abs() < 1e-9);
+        assert!((f / theory - 1.0).abs() < 0.1, "{f} against {theory}");
+        assert!(l["measured_damping_ratio"].as_f64().unwrap() > 0.0);
+    }
 }

@@ -41,6 +41,9 @@ pub enum Scene {
     /// A sausage folded double on a table, self contact on (`--self-contact off` to compare);
     /// `--seconds` is the fold and the hold together.
     Fold,
+    /// A free bar ringing axially: its first frequency against beam theory, its decay against
+    /// the damping ratio (`--res`: nodes across; `--damping`).
+    Vibration,
     /// The cheapest sinew model and integrator inside the bounds, for each `--trial` (fall,
     /// limb, crush; default all three) at `--res` and `--dt` (default 1/60 s), crush under
     /// `--mass` (default 1000 kg); `--max-error`, `--min-volume` set the bounds.
@@ -145,6 +148,9 @@ pub struct Args {
     /// `sinew_scenes::dim3::advise`).
     #[arg(long)]
     pub max_error: Option<f64>,
+    /// Damping ratio (vibration).
+    #[arg(long)]
+    pub damping: Option<f64>,
     /// `advise`: the smallest cell volume ratio allowed (default 0: no inverted cell).
     #[arg(long)]
     pub min_volume: Option<f64>,
@@ -300,6 +306,9 @@ pub fn to_json(r: &Record) -> Value {
         "final_speed": r.final_speed,
         "pairs_wall_s": r.pairs_wall_s,
         "measured_poisson": r.measured_poisson,
+        "measured_frequency": r.measured_frequency,
+        "theory_frequency": r.theory_frequency,
+        "measured_damping_ratio": r.measured_damping_ratio,
     });
     if let (Some(all), Value::Object(more)) = (object.as_object_mut(), contact) {
         all.extend(more);
@@ -326,6 +335,7 @@ fn table_header(scene: Scene) -> String {
             " bodies  inside mm  at rest mm  E gain   speed  rest m  pairs ms/s"
         }
         Scene::Fold => "  self mm",
+        Scene::Vibration => "   f Hz  theory Hz  ζ measured",
         Scene::Advise => "",
     };
     format!(
@@ -368,6 +378,12 @@ fn table_row(scene: Scene, r: &Record) -> String {
             opt(r.pairs_wall_s.map(|p| p * 1e3 / r.sim_s.max(1e-9)), 2)
         ),
         Scene::Fold => format!("  {:>7}", opt(r.max_self_penetration.map(|p| p * 1e3), 3)),
+        Scene::Vibration => format!(
+            "  {:>5}  {:>9}  {:>10}",
+            opt(r.measured_frequency, 3),
+            opt(r.theory_frequency, 3),
+            opt(r.measured_damping_ratio, 4)
+        ),
         Scene::Advise => String::new(),
         Scene::Crush => format!(
             "  {:>9}  {:>6}  {:>9}  {:>10}",
@@ -450,7 +466,7 @@ macro_rules! dimension_runner {
             use sinew_scenes::$dim::{
                 dt_sweep, BallScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
                 ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
-                StackScene, StretchScene, Subject, CRUSH_MASSES,
+                StackScene, StretchScene, Subject, VibrationScene, CRUSH_MASSES,
             };
 
             fn fits(args: &Args) -> Result<Vec<RotationFit>, String> {
@@ -788,6 +804,20 @@ macro_rules! dimension_runner {
                                 load: args.mass.first().map_or(d.load, |&m| m as Real),
                                 dt: args.dt.map_or(d.dt, |v| v as Real),
                                 seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                                ..d
+                            };
+                            vec![scene.run().map_err(err)?]
+                        }
+                        Scene::Vibration => {
+                            let d = VibrationScene::default();
+                            let scene = VibrationScene {
+                                subject,
+                                resolution: args.res.unwrap_or(d.resolution),
+                                dt: args.dt.map_or(d.dt, |v| v as Real),
+                                young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
+                                poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                                damping_ratio: args.damping.map_or(d.damping_ratio, |v| v as Real),
+                                integrator: cube.integrator,
                                 ..d
                             };
                             vec![scene.run().map_err(err)?]

@@ -35,3 +35,4 @@ mod snapshot;
 mod soft;
 mod support;
 mod validation;
+mod vibration;

@@ -133,6 +133,12 @@ pub struct Record {
     pub sag_wobble: Option<f64>,
     /// `stretch`: Poisson's ratio measured, `−ε_lateral / ε_axial` in the bar's middle.
     pub measured_poisson: Option<f64>,
+    /// `vibration`: the first axial frequency measured, Hz.
+    pub measured_frequency: Option<f64>,
+    /// `vibration`: the first axial frequency of beam theory, Hz.
+    pub theory_frequency: Option<f64>,
+    /// `vibration`: the damping ratio measured from the ringing's decay.
+    pub measured_damping_ratio: Option<f64>,
     /// Kinetic energy at the end, J.
     pub final_kinetic_energy: f64,
     /// Whether the state turned non-finite.

@@ -49,6 +49,12 @@ pub fn bar_axial_frequency(mode: u32, length: f64, young_modulus: f64, density: 
     (2.0 * mode as f64 - 1.0) * PI / (2.0 * length) * (young_modulus / density).sqrt()
 }
 
+/// The `mode`-th (1, 2, …) axial angular frequency (rad/s) of a bar of length `length` free
+/// at both ends: `n π/L · √(E/ρ)`.
+pub fn free_bar_axial_frequency(mode: u32, length: f64, young_modulus: f64, density: f64) -> f64 {
+    mode as f64 * PI / length * (young_modulus / density).sqrt()
+}
+
 /// Logarithmic decrement `ln(x_k / x_{k+1})` of successive peaks of a free vibration with
 /// damping ratio `ζ` (`0 ≤ ζ < 1`).
 pub fn log_decrement(damping_ratio: f64) -> f64 {
@@ -131,6 +137,23 @@ mod tests {
         // Steel, 1 m: c = √(200e9/7850) = 5047.5 m/s, f₁ = c/(4L) = 1261.9 Hz.
         let f = bar_axial_frequency(1, 1.0, 200e9, 7850.0) / (2.0 * PI);
         assert!(close(f, 1261.9, 1e-4), "{f}");
+    }
+
+    #[test]
+    fn a_free_bar_rings_at_twice_the_clamped_one() {
+        // Free-free: f₁ = c/(2L); steel, 1 m: 2523.8 Hz, twice the clamped-free bar's.
+        let f = free_bar_axial_frequency(1, 1.0, 200e9, 7850.0) / (2.0 * PI);
+        assert!(close(f, 2523.8, 1e-4), "{f}");
+        assert!(close(
+            free_bar_axial_frequency(1, 1.0, 200e9, 7850.0),
+            2.0 * bar_axial_frequency(1, 1.0, 200e9, 7850.0),
+            1e-12
+        ));
+        assert!(close(
+            free_bar_axial_frequency(3, 2.0, 4.0, 1.0),
+            3.0 * PI,
+            1e-12
+        ));
     }
 
     #[test]

@@ -17,6 +17,7 @@
 //! | [`RotationErrorScene`] | (accuracy) spurious angular acceleration of the rotation fit | — |
 //! | [`CantileverScene`] | (accuracy) static sag against Euler–Bernoulli; fails only if it does not settle | — |
 //! | [`StackScene`], [`PileScene`], [`SqueezeScene`] | a cell inverts, or bodies rest inside each other by over 1 % of their size | — |
+//! | [`VibrationScene`] | (accuracy) a free bar's first axial frequency and decay; fails if it explodes, inverts or does not ring | — |
 //! | [`FoldScene`] | the surface passes into itself (over 1 % of a cell) or a cell inverts | — |
 
 pub mod advise;
@@ -35,6 +36,7 @@ mod sim;
 mod stretch;
 mod subject;
 pub mod testing;
+mod vibration;
 
 pub use crate::beam::{euler_bernoulli_tip_sag, sag_error};
 pub use crate::record::{Record, Spread};
@@ -52,3 +54,4 @@ pub use rotation_error::{spurious_acceleration, RotationErrorScene};
 pub use sim::{Sim, RAPIER_SKIN};
 pub use stretch::StretchScene;
 pub use subject::{RapierModel, Subject};
+pub use vibration::{Ring, VibrationScene};
