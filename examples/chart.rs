@@ -51,6 +51,10 @@ struct Args {
     /// Compute the fall's reference again (needs `--features sinew-scenes/fem`).
     #[arg(long)]
     fresh_reference: bool,
+    /// Run nothing: draw the charts and write the tables again from `<out>/charts/points.jsonl`
+    /// (the points of the last run).
+    #[arg(long)]
+    redraw: bool,
 }
 
 /// One run's place on a chart.
@@ -71,6 +75,21 @@ impl Point {
         json!({
             "metric": self.metric, "model": self.model, "res": self.res, "dt": self.dt,
             "wall_per_sim_s": self.cost, "error": self.error, "failed": self.failed,
+        })
+    }
+
+    /// A point written by [`Point::json`], on one of `metrics`.
+    fn from_json(v: &serde_json::Value, metrics: &[&Metric]) -> Option<Point> {
+        let metric = metrics.iter().find(|m| v["metric"] == m.key)?.key;
+        let num = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+        Some(Point {
+            metric,
+            model: v["model"].as_str()?.to_string(),
+            res: v["res"].as_u64()? as usize,
+            dt: num("dt"),
+            cost: num("wall_per_sim_s"),
+            error: num("error"),
+            failed: v["failed"].as_str().map(str::to_string),
         })
     }
 }
@@ -609,9 +628,11 @@ fn draw(metric: &Metric, points: &[Point], path: &Path) -> Result<(), Box<dyn st
     let (y0, y1) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
         (a.min(y_of(p.error)), b.max(y_of(p.error)))
     });
-    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    let root = SVGBackend::new(path, (1100, 600)).into_drawing_area();
     root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
+    // The legend has a column of its own: over the plot it would hide points.
+    let (plot, side) = root.split_horizontally(880);
+    let mut chart = ChartBuilder::on(&plot)
         .caption(metric.title, ("sans-serif", 18))
         .margin(12)
         .x_label_area_size(45)
@@ -634,29 +655,32 @@ fn draw(metric: &Metric, points: &[Point], path: &Path) -> Result<(), Box<dyn st
     models.dedup();
     for (k, model) in models.iter().enumerate() {
         let color = Palette99::pick(k).to_rgba();
-        let series: Vec<(f64, f64)> = pts
-            .iter()
-            .filter(|p| p.model == *model)
-            .map(|p| (p.cost, y_of(p.error)))
-            .collect();
         let rapier = model.starts_with("rapier");
-        chart
-            .draw_series(series.iter().map(|&(x, y)| {
-                if rapier {
-                    TriangleMarker::new((x, y), 6, color.filled()).into_dyn()
-                } else {
-                    Circle::new((x, y), 5, color.filled()).into_dyn()
-                }
-            }))?
-            .label(*model)
-            .legend(move |(x, y)| Circle::new((x, y), 5, color.filled()));
+        let marker = move |(x, y): (f64, f64)| {
+            if rapier {
+                TriangleMarker::new((x, y), 6, color.filled()).into_dyn()
+            } else {
+                Circle::new((x, y), 5, color.filled()).into_dyn()
+            }
+        };
+        chart.draw_series(
+            pts.iter()
+                .filter(|p| p.model == *model)
+                .map(|p| marker((p.cost, y_of(p.error)))),
+        )?;
+        let y = 60 + 20 * k as i32;
+        let legend_marker = if rapier {
+            TriangleMarker::new((12, y), 6, color.filled()).into_dyn()
+        } else {
+            Circle::new((12, y), 5, color.filled()).into_dyn()
+        };
+        side.draw(&legend_marker)?;
+        side.draw(&Text::new(
+            model.to_string(),
+            (26, y - 7),
+            ("sans-serif", 13).into_font(),
+        ))?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()?;
     root.present()?;
     Ok(())
 }
@@ -729,37 +753,44 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let reference = fall_reference(Path::new(FALL_REFERENCE_PATH), true)?;
         println!("{}", reference_table(&reference));
     }
-    if wanted("fall") {
-        let reference = fall_reference(Path::new(FALL_REFERENCE_PATH), fresh)?;
-        preamble = reference_table(&reference);
-        sections.push((&FALL, fall(args.quick, &reference)));
-    }
-    if wanted("crush") {
-        let points = crush(args.quick);
-        let (volume, shape): (Vec<Point>, Vec<Point>) = points
-            .into_iter()
-            .partition(|p| p.metric == CRUSH_VOLUME.key);
-        sections.push((&CRUSH_SHAPE, shape));
-        sections.push((&CRUSH_VOLUME, volume));
-    }
-    if wanted("heavy") {
-        let (crush, limb) = heavy(args.quick);
-        sections.push((&CRUSH_HEAVY, crush));
-        sections.push((&LIMB, limb));
-    }
-    if wanted("vibration") {
-        let (frequency, damping) = vibration(args.quick);
-        sections.push((&FREQUENCY, frequency));
-        sections.push((&DAMPING, damping));
-    }
-    if wanted("stretch") {
-        sections.push((&STRETCH, stretch(args.quick)));
-    }
-    if wanted("sag") {
-        sections.push((&SAG, sag(args.quick)));
-    }
-    if wanted("rotation") {
-        sections.push((&ROTATION, rotation(args.quick)));
+    if args.redraw {
+        let metrics = [
+            &FALL,
+            &CRUSH_SHAPE,
+            &CRUSH_VOLUME,
+            &CRUSH_HEAVY,
+            &LIMB,
+            &FREQUENCY,
+            &DAMPING,
+            &STRETCH,
+            &SAG,
+            &ROTATION,
+        ];
+        let text = std::fs::read_to_string(charts.join("points.jsonl"))?;
+        let mut points = Vec::new();
+        for line in text.lines().filter(|l| !l.trim().is_empty()) {
+            let v: serde_json::Value = serde_json::from_str(line)?;
+            points.push(
+                Point::from_json(&v, &metrics)
+                    .ok_or_else(|| format!("points.jsonl: not a chart point: {line}"))?,
+            );
+        }
+        for metric in metrics {
+            let mine: Vec<Point> = points
+                .iter()
+                .filter(|p| p.metric == metric.key)
+                .cloned()
+                .collect();
+            if !mine.is_empty() && wanted(metric_group(metric.key)) {
+                if metric.key == FALL.key {
+                    let reference = fall_reference(Path::new(FALL_REFERENCE_PATH), false)?;
+                    preamble = reference_table(&reference);
+                }
+                sections.push((metric, mine));
+            }
+        }
+    } else {
+        run_sweeps(&args, &wanted, fresh, &mut sections, &mut preamble)?;
     }
 
     let mut jsonl = String::new();
@@ -802,6 +833,64 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if args.out.is_none() && !args.quick && args.only.is_empty() {
         refresh_readme(&readme_tables)?;
     }
+    Ok(())
+}
+
+/// `--only`'s name for the sweep that makes `key`'s points.
+fn metric_group(key: &str) -> &'static str {
+    match key {
+        "fall-trajectory" => "fall",
+        "crush-shape" | "crush-volume" => "crush",
+        "crush-heavy" | "limb" => "heavy",
+        "vibration-frequency" | "vibration-damping" => "vibration",
+        "stretch-poisson" => "stretch",
+        "cantilever-sag" => "sag",
+        _ => "rotation",
+    }
+}
+
+/// Runs the wanted sweeps, each a section of the charts (the fall's with its reference's
+/// table as `preamble`).
+fn run_sweeps(
+    args: &Args,
+    wanted: &dyn Fn(&str) -> bool,
+    fresh: bool,
+    sections: &mut Vec<(&'static Metric, Vec<Point>)>,
+    preamble: &mut String,
+) -> Result<(), Box<dyn std::error::Error>> {
+    if wanted("fall") {
+        let reference = fall_reference(Path::new(FALL_REFERENCE_PATH), fresh)?;
+        *preamble = reference_table(&reference);
+        sections.push((&FALL, fall(args.quick, &reference)));
+    }
+    if wanted("crush") {
+        let points = crush(args.quick);
+        let (volume, shape): (Vec<Point>, Vec<Point>) = points
+            .into_iter()
+            .partition(|p| p.metric == CRUSH_VOLUME.key);
+        sections.push((&CRUSH_SHAPE, shape));
+        sections.push((&CRUSH_VOLUME, volume));
+    }
+    if wanted("heavy") {
+        let (crush, limb) = heavy(args.quick);
+        sections.push((&CRUSH_HEAVY, crush));
+        sections.push((&LIMB, limb));
+    }
+    if wanted("vibration") {
+        let (frequency, damping) = vibration(args.quick);
+        sections.push((&FREQUENCY, frequency));
+        sections.push((&DAMPING, damping));
+    }
+    if wanted("stretch") {
+        sections.push((&STRETCH, stretch(args.quick)));
+    }
+    if wanted("sag") {
+        sections.push((&SAG, sag(args.quick)));
+    }
+    if wanted("rotation") {
+        sections.push((&ROTATION, rotation(args.quick)));
+    }
+
     Ok(())
 }
 
