@@ -458,3 +458,22 @@ fn the_vibration_scene_measures_frequency_and_damping() {
         assert!(l["measured_damping_ratio"].as_f64().unwrap() > 0.0);
     }
 }
+
+#[test]
+fn the_bending_scene_measures_the_cantilevers_first_frequency() {
+    let lines = run(&["bending", "--model", "springs"]);
+    assert_eq!(lines.len(), 2, "both dimensions");
+    for l in &lines {
+        assert_eq!(l["scene"], "cantilever-ring");
+        let (f, theory) = (
+            l["measured_frequency"].as_f64().unwrap(),
+            l["theory_frequency"].as_f64().unwrap(),
+        );
+        // Euler–Bernoulli for the default beam (1 m, 0.1 m thick, E = 10⁸ Pa, 1000 kg/m³):
+        // 1.8751² √(E h² / 12 ρ) / 2π = 5.108 Hz.
+        assert!((theory - 5.108).abs() < 1e-3, "theory {theory}");
+        // Res 3 is stiff in bending (linear cells lock): 10–30 % high, not double.
+        assert!((0.9..1.5).contains(&(f / theory)), "{f} against {theory}");
+        assert!(l["sag"].as_f64().unwrap() > 0.0);
+    }
+}

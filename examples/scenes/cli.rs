@@ -44,6 +44,10 @@ pub enum Scene {
     /// A free bar ringing axially: its first frequency against beam theory, its decay against
     /// the damping ratio (`--res`: nodes across; `--damping`).
     Vibration,
+    /// A clamped beam released straight under its weight, ringing: its first bending
+    /// frequency against Euler–Bernoulli (`--res`: nodes across, default 3; `--seconds`,
+    /// default 0.8).
+    Bending,
     /// The cheapest sinew model and integrator inside the bounds, for each `--trial` (fall,
     /// limb, crush; default all three) at `--res` and `--dt` (default 1/60 s), crush under
     /// `--mass` (default 1000 kg); `--max-error`, `--min-volume` set the bounds.
@@ -119,7 +123,7 @@ pub struct Args {
     /// Strikes of the manipulator (default 20).
     #[arg(long)]
     pub strikes: Option<usize>,
-    /// sinew's integrator (fall, ball, limb, stack, stretch, dt-sweep, crush, manipulator).
+    /// sinew's integrator (every scene but rotation-error, pile, squeeze and fold).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
     /// Gauss–Seidel sweeps per step of the implicit integrator (default 10). (`--iterations`
@@ -336,6 +340,7 @@ fn table_header(scene: Scene) -> String {
         }
         Scene::Fold => "  self mm",
         Scene::Vibration => "   f Hz  theory Hz  ζ measured",
+        Scene::Bending => "   f Hz  theory Hz   mean sag mm",
         Scene::Advise => "",
     };
     format!(
@@ -383,6 +388,12 @@ fn table_row(scene: Scene, r: &Record) -> String {
             opt(r.measured_frequency, 3),
             opt(r.theory_frequency, 3),
             opt(r.measured_damping_ratio, 4)
+        ),
+        Scene::Bending => format!(
+            "  {:>5}  {:>9}  {:>12}",
+            opt(r.measured_frequency, 3),
+            opt(r.theory_frequency, 3),
+            opt(r.sag.map(|s| s * 1e3), 2)
         ),
         Scene::Advise => String::new(),
         Scene::Crush => format!(
@@ -879,9 +890,24 @@ macro_rules! dimension_runner {
                                 seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                                integrator: cube.integrator,
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
+                        }
+                        Scene::Bending => {
+                            let d = CantileverScene::default();
+                            let scene = CantileverScene {
+                                subject,
+                                resolution: args.res.unwrap_or(3),
+                                dt: args.dt.map_or(d.dt, |v| v as Real),
+                                seconds: args.seconds.map_or(0.8, |v| v as Real),
+                                young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
+                                poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                                integrator: cube.integrator,
+                                ..d
+                            };
+                            vec![scene.ring().map_err(err)?]
                         }
                         // Run above: it has one subject of its own.
                         Scene::RotationError | Scene::Advise => Vec::new(),

@@ -39,3 +39,33 @@ fn best_sinew_model_sags_within_15_percent_of_euler_bernoulli() {
         error * 100.0
     );
 }
+
+/// Released straight under its weight, the beam rings at its first bending frequency: at 5
+/// nodes across, shape matching and edge repulsion within 8 % of Euler–Bernoulli, and closer
+/// than at 3 (linear triangles are too stiff in bending on a coarse lattice).
+#[test]
+fn the_beam_rings_at_its_first_bending_frequency() {
+    for model in [ElementModel::SHAPE_MATCHING, ElementModel::EdgeRepulsion] {
+        let error = |resolution| {
+            let r = CantileverScene {
+                subject: Subject::Sinew(model),
+                resolution,
+                seconds: 0.8,
+                ..CantileverScene::default()
+            }
+            .ring()
+            .expect("the beam builds");
+            assert!(!r.failed, "{}: {:?}", r.model, r.failure);
+            let (f, theory) = (r.measured_frequency.unwrap(), r.theory_frequency.unwrap());
+            f / theory - 1.0
+        };
+        let (coarse, fine) = (error(3), error(5));
+        assert!(
+            fine.abs() <= 0.08 && fine.abs() < coarse.abs(),
+            "{}: {:.1} % off at res 5, {:.1} % at res 3",
+            model.name(),
+            fine * 100.0,
+            coarse * 100.0
+        );
+    }
+}
