@@ -53,6 +53,7 @@ const KEYS: &[(&str, &str)] = &[
     ("final_speed", "f?"),
     ("pairs_wall_s", "f?"),
     ("measured_poisson", "f?"),
+    ("measured_young_modulus", "f?"),
     ("measured_frequency", "f?"),
     ("theory_frequency", "f?"),
     ("measured_damping_ratio", "f?"),
@@ -475,5 +476,21 @@ fn the_bending_scene_measures_the_cantilevers_first_frequency() {
         // Res 3 is stiff in bending (linear cells lock): 10–30 % high, not double.
         assert!((0.9..1.5).contains(&(f / theory)), "{f} against {theory}");
         assert!(l["sag"].as_f64().unwrap() > 0.0);
+    }
+}
+
+#[test]
+fn the_stretch_measures_youngs_modulus_from_the_pulled_ends_tension() {
+    let lines = run(&["stretch", "--res", "5", "--model", "sinew", "rapier-volume"]);
+    assert_eq!(lines.len(), 12, "six models, both dimensions");
+    for l in &lines {
+        let e = l["measured_young_modulus"].as_f64();
+        if l["model"].as_str().unwrap().starts_with("rapier") {
+            assert!(e.is_none(), "rapier's bodies expose no node forces: {l:?}");
+        } else {
+            // The default bar: E = 10⁴ Pa, pulled 2 %.
+            let e = e.expect("sinew's models give the tension");
+            assert!((e / 1.0e4 - 1.0).abs() < 0.05, "{}: E = {e}", l["model"]);
+        }
     }
 }

@@ -310,6 +310,7 @@ pub fn to_json(r: &Record) -> Value {
         "final_speed": r.final_speed,
         "pairs_wall_s": r.pairs_wall_s,
         "measured_poisson": r.measured_poisson,
+        "measured_young_modulus": r.measured_young_modulus,
         "measured_frequency": r.measured_frequency,
         "theory_frequency": r.theory_frequency,
         "measured_damping_ratio": r.measured_damping_ratio,

@@ -133,6 +133,9 @@ pub struct Record {
     pub sag_wobble: Option<f64>,
     /// `stretch`: Poisson's ratio measured, `−ε_lateral / ε_axial` in the bar's middle.
     pub measured_poisson: Option<f64>,
+    /// `stretch`: Young's modulus measured, the pulled end's tension over the bar's section
+    /// over the middle's axial strain, Pa (sinew's models: rapier's expose no node forces).
+    pub measured_young_modulus: Option<f64>,
     /// `vibration`: the first axial frequency measured, Hz.
     pub measured_frequency: Option<f64>,
     /// `vibration`: the first axial frequency of beam theory, Hz.

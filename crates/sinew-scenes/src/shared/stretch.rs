@@ -18,7 +18,10 @@ use super::Record;
 /// faces bound to two bones: one fixed, the other pulled along the bar's axis to `strain` over
 /// `ramp` s (smoothly), then held `hold` s. At the end, in the middle of the bar (two widths
 /// from either clamp), the axial strain between the sections at ±1.5 m and the lateral strain
-/// of the middle section's width give `measured_poisson = −ε_lateral / ε_axial`.
+/// of the middle section's width give `measured_poisson = −ε_lateral / ε_axial`; for sinew's
+/// models the element forces on the pulled end's nodes give the tension `T`, and
+/// `measured_young_modulus = T / (A ε_axial)` with `A` the bar's rest section (1 m², 1 m of
+/// unit depth in 2D) — the stress is uniaxial in the middle, where the section is free.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct StretchScene {
     /// What is simulated.
@@ -89,6 +92,7 @@ impl StretchScene {
                 .collect()
         };
         let (left, right) = (end(-1.0), end(1.0));
+        let pulled_nodes = right.clone();
         let mut pins = Vec::new();
         let mut puller = None;
         for (side, nodes) in [(-1.0, left), (1.0, right)] {
@@ -133,29 +137,52 @@ impl StretchScene {
             }
         }
         let mut r = sim.record("stretch", res[0]);
+        let axial = axial_strain(sim.rest_positions(), sim.positions());
         r.measured_poisson = measured_poisson(sim.rest_positions(), sim.positions());
+        // The elastic forces on the pulled end's nodes pull it back: their sum is −T.
+        let tension = sim
+            .handle()
+            .and_then(|h| sim.world.deformables.get_mut(h))
+            .map(|body| {
+                let f = body.element_forces();
+                -pulled_nodes.iter().map(|&i| f[i as usize][0]).sum::<Real>() as f64
+            });
+        r.measured_young_modulus = tension
+            .zip(axial)
+            .filter(|(_, e)| e.abs() > 1e-6)
+            .map(|(t, e)| t / e);
         Ok(r)
     }
 }
 
-/// `−ε_lateral / ε_axial` in the middle of the bar (see [`StretchScene`]).
-fn measured_poisson(rest: &[Vector], x: &[Vector]) -> Option<f64> {
-    let section = |at: Real| -> Vec<usize> {
-        (0..rest.len())
-            .filter(|&i| (rest[i][0] - at).abs() < 1e-4)
-            .collect()
-    };
+/// The section at `at` along the bar: its nodes.
+fn section(rest: &[Vector], at: Real) -> Vec<usize> {
+    (0..rest.len())
+        .filter(|&i| (rest[i][0] - at).abs() < 1e-4)
+        .collect()
+}
+
+/// The axial strain between the sections at ±1.5 m (see [`StretchScene`]).
+fn axial_strain(rest: &[Vector], x: &[Vector]) -> Option<f64> {
     let mean_x =
         |nodes: &[usize]| nodes.iter().map(|&i| x[i][0]).sum::<Real>() / nodes.len() as Real;
-    let (a, b, mid) = (
-        section(-0.5 * HALF_LENGTH),
-        section(0.5 * HALF_LENGTH),
-        section(0.0),
+    let (a, b) = (
+        section(rest, -0.5 * HALF_LENGTH),
+        section(rest, 0.5 * HALF_LENGTH),
     );
-    if a.is_empty() || b.is_empty() || mid.is_empty() {
+    if a.is_empty() || b.is_empty() {
         return None;
     }
-    let axial = (mean_x(&b) - mean_x(&a)) / HALF_LENGTH - 1.0;
+    Some(((mean_x(&b) - mean_x(&a)) / HALF_LENGTH - 1.0) as f64)
+}
+
+/// `−ε_lateral / ε_axial` in the middle of the bar (see [`StretchScene`]).
+fn measured_poisson(rest: &[Vector], x: &[Vector]) -> Option<f64> {
+    let axial = axial_strain(rest, x)?;
+    let mid = section(rest, 0.0);
+    if mid.is_empty() {
+        return None;
+    }
     let lateral = (1..DIM)
         .map(|d| {
             let (lo, hi) = mid
@@ -167,5 +194,5 @@ fn measured_poisson(rest: &[Vector], x: &[Vector]) -> Option<f64> {
         })
         .sum::<Real>()
         / (DIM - 1) as Real;
-    (axial.abs() > 1e-6).then(|| -(lateral / axial) as f64)
+    (axial.abs() > 1e-6).then(|| -(lateral as f64 / axial))
 }
