@@ -32,13 +32,17 @@ macro_rules! run_dimension {
         // that stays inside the trial's bounds on this very scene.
         let picks: Vec<(ElementModel, sinew::$dim::Integrator)> = if sink::flag("--advise") {
             use sinew_scenes::$dim::advise::{advise, candidates, Trial};
+            let reference = sinew_scenes::$dim::FallReference::load(std::path::Path::new(
+                sinew_scenes::$dim::FALL_REFERENCE_PATH,
+            ));
+            if let Err(e) = &reference {
+                // The common reference is 3D: a 2D pick is judged on stability alone.
+                println!("{:<3} advise: no fall reference ({e}): judged on stability alone", $label);
+            }
             let trial = Trial::Fall {
-                    scene: base,
-                    reference: sinew_scenes::$dim::FallReference::load(std::path::Path::new(
-                        sinew_scenes::$dim::FALL_REFERENCE_PATH,
-                    ))
-                    .ok(),
-                };
+                scene: base,
+                reference: reference.ok(),
+            };
             match advise(&trial, trial.default_bounds(), &candidates(), |_| {}) {
                 Ok(advice) => {
                     for c in &advice.candidates {
