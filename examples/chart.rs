@@ -96,12 +96,15 @@ impl Point {
 
 /// A chart's axis text.
 struct Metric {
+    /// The sweep that makes its points (`--only`'s name).
+    group: &'static str,
     key: &'static str,
     title: &'static str,
     y: &'static str,
 }
 
 const FALL: Metric = Metric {
+    group: "fall",
     key: "fall-trajectory",
     title: "fall: centre-of-mass trajectory error vs the common reference (rapier FEM, fine)",
     y: "RMS error / size",
@@ -144,58 +147,69 @@ fn fall_reference(path: &Path, fresh: bool) -> Result<FallReference, Box<dyn std
 }
 
 const CRUSH_SHAPE: Metric = Metric {
+    group: "crush",
     key: "crush-shape",
     title: "crush 10 kg and release: shape error after recovery",
     y: "shape error / size",
 };
 const CRUSH_VOLUME: Metric = Metric {
+    group: "crush",
     key: "crush-volume",
     title: "static load 10 kg: |ΔV/V − (−(1−2ν)σ/E)|",
     y: "volume error",
 };
 const CRUSH_HEAVY: Metric = Metric {
+    group: "heavy",
     key: "crush-heavy",
     title: "crush 1000 kg and release: shape error after recovery",
     y: "shape error / size",
 };
 const LIMB: Metric = Metric {
+    group: "heavy",
     key: "limb",
     title: "limb bent to 110°: 1 − smallest cell volume ratio (inverted runs: failed)",
     y: "1 − min volume ratio",
 };
 const FREQUENCY: Metric = Metric {
+    group: "vibration",
     key: "vibration-frequency",
     title: "free bar (10:1) ringing: |first axial frequency / beam theory − 1|",
     y: "relative frequency error",
 };
 const DAMPING: Metric = Metric {
+    group: "vibration",
     key: "vibration-damping",
     title: "free bar ringing: |damping ratio of its decay / the ratio asked for (0.05) − 1|",
     y: "relative damping error",
 };
 const STRETCH: Metric = Metric {
+    group: "stretch",
     key: "stretch-poisson",
     title: "bar pulled 2 %: |Poisson's ratio measured − 0.3|",
     y: "|ν measured − ν|",
 };
 const YOUNG: Metric = Metric {
+    group: "stretch",
     key: "stretch-young",
     title: "bar pulled 2 %: |Young's modulus (end tension / section / strain) / E − 1|",
     y: "relative Young's modulus error",
 };
 const ROTATION: Metric = Metric {
+    group: "rotation",
     key: "rotation",
     title: "rotation-error drop (k/m 1e4): spurious angular acceleration",
     y: "mean spurious acceleration, rad/s²",
 };
 
 const SAG: Metric = Metric {
+    group: "sag",
     key: "cantilever-sag",
     title: "cantilever (10:1, clamped by a bone): |tip sag / (Euler–Bernoulli + shear) − 1|",
     y: "relative sag error",
 };
 
 const BENDING: Metric = Metric {
+    group: "sag",
     key: "cantilever-frequency",
     title: "cantilever (10:1) released under its weight: |first bending frequency / Euler–Bernoulli − 1|",
     y: "relative frequency error",
@@ -856,7 +870,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .filter(|p| p.metric == metric.key)
                 .cloned()
                 .collect();
-            if !mine.is_empty() && wanted(metric_group(metric.key)) {
+            if !mine.is_empty() && wanted(metric.group) {
                 if metric.key == FALL.key {
                     let reference = fall_reference(Path::new(FALL_REFERENCE_PATH), false)?;
                     preamble = reference_table(&reference);
@@ -903,25 +917,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         println!("{}\n{}", metric.title, t);
     }
-    std::fs::write(charts.join("points.jsonl"), jsonl)?;
-    std::fs::write(out.join("ACCURACY.md"), doc)?;
+    // A part of the sweeps does not overwrite the docs' record of a whole run (it draws its
+    // charts and prints its tables); a redraw keeps the run's points as they are.
+    if !args.only.is_empty() && args.out.is_none() {
+        eprintln!("--only without --out: points.jsonl and ACCURACY.md left as they were");
+    } else {
+        if !args.redraw {
+            std::fs::write(charts.join("points.jsonl"), jsonl)?;
+        }
+        std::fs::write(out.join("ACCURACY.md"), doc)?;
+    }
     if args.out.is_none() && !args.quick && args.only.is_empty() {
         refresh_readme(&readme_tables)?;
     }
     Ok(())
-}
-
-/// `--only`'s name for the sweep that makes `key`'s points.
-fn metric_group(key: &str) -> &'static str {
-    match key {
-        "fall-trajectory" => "fall",
-        "crush-shape" | "crush-volume" => "crush",
-        "crush-heavy" | "limb" => "heavy",
-        "vibration-frequency" | "vibration-damping" => "vibration",
-        "stretch-poisson" | "stretch-young" => "stretch",
-        "cantilever-sag" | "cantilever-frequency" => "sag",
-        _ => "rotation",
-    }
 }
 
 /// Runs the wanted sweeps, each a section of the charts (the fall's with its reference's

@@ -123,7 +123,7 @@ pub struct Args {
     /// Strikes of the manipulator (default 20).
     #[arg(long)]
     pub strikes: Option<usize>,
-    /// sinew's integrator (every scene but rotation-error, pile, squeeze and fold).
+    /// sinew's integrator (every scene but rotation-error, pile, squeeze, fold and advise).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
     /// Gauss–Seidel sweeps per step of the implicit integrator (default 10). (`--iterations`

@@ -122,7 +122,8 @@ pub struct Record {
     pub max_anchor_error: Option<f64>,
     /// Spurious angular acceleration of the element forces, rad/s² (rotation-error).
     pub spurious: Option<Spread>,
-    /// Static tip sag of the cantilever: mean downward displacement of its free end's nodes, m.
+    /// Static tip sag of the cantilever: mean downward displacement of its free end's nodes, m
+    /// (`cantilever-ring`: that displacement's mean over the run, about which it rings).
     pub sag: Option<f64>,
     /// Euler–Bernoulli tip sag of the same beam ([`crate::beam::euler_bernoulli_tip_sag`]), m.
     pub sag_theory: Option<f64>,
@@ -136,9 +137,11 @@ pub struct Record {
     /// `stretch`: Young's modulus measured, the pulled end's tension over the bar's section
     /// over the middle's axial strain, Pa (sinew's models: rapier's expose no node forces).
     pub measured_young_modulus: Option<f64>,
-    /// `vibration`: the first axial frequency measured, Hz.
+    /// `vibration`: the first axial frequency measured, Hz (`cantilever-ring`: the first
+    /// bending frequency).
     pub measured_frequency: Option<f64>,
-    /// `vibration`: the first axial frequency of beam theory, Hz.
+    /// `vibration`: the first axial frequency of beam theory, Hz (`cantilever-ring`:
+    /// Euler–Bernoulli's first bending frequency).
     pub theory_frequency: Option<f64>,
     /// `vibration`: the damping ratio measured from the ringing's decay.
     pub measured_damping_ratio: Option<f64>,

@@ -306,8 +306,8 @@ impl CantileverScene {
     /// The beam released straight under its weight rings about its sag: without the drag
     /// (`relaxation` is not used) the tip's sag is traced for `seconds` and its first bending
     /// frequency, from the zero crossings of the trace less its mean ([`Ring`]), goes to
-    /// `measured_frequency`, Euler–Bernoulli's ([`Self::first_frequency`], in Hz) to
-    /// `theory_frequency`. Shear and rotary inertia, which lower a short beam's frequency, are
+    /// `measured_frequency` (Hz), Euler–Bernoulli's ([`Self::first_frequency`] over 2π, Hz)
+    /// to `theory_frequency`, the trace's mean (about the static sag) to `sag`. Shear and rotary inertia, which lower a short beam's frequency, are
     /// not in the theory. A run under four crossings fails as "did not ring".
     pub fn ring(&self) -> Result<Record, BuildError> {
         let (mut sim, tip) = self.sim()?;

@@ -144,8 +144,15 @@ impl FallScene {
     /// the trajectory that [`super::metrics::trajectory_error`] compares across dt and
     /// resolution. A sample falling inside a step is interpolated linearly between the centres
     /// of mass at the step's ends, so the k-th sample is at time k·`every` whatever dt is (a
-    /// step longer than `every` yields several).
+    /// step longer than `every` yields several). `every` must be positive and finite.
     pub fn run_sampled(&self, every: Real) -> Result<(Record, Vec<Vector>), BuildError> {
+        if !(every.is_finite() && every > 0.0) {
+            return Err(BuildError::InvalidParameter {
+                name: "every",
+                value: every,
+                expected: "a positive finite sampling interval",
+            });
+        }
         let mut samples = Vec::new();
         let r = self.run_inner(|_, _| {}, Some((every, &mut samples)))?;
         Ok((r, samples))

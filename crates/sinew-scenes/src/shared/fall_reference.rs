@@ -184,7 +184,8 @@ impl FallReference {
             })
             .collect::<Option<Vec<_>>>()?;
         let (every, seconds) = (v["every"].as_f64()? as Real, v["seconds"].as_f64()? as Real);
-        (!runs.is_empty()).then(|| FallReference {
+        let positive = |x: Real| x.is_finite() && x > 0.0;
+        (!runs.is_empty() && positive(every) && positive(seconds)).then(|| FallReference {
             model: v["model"].as_str().unwrap_or_default().to_string(),
             every,
             seconds,

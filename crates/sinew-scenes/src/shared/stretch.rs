@@ -147,10 +147,12 @@ impl StretchScene {
                 let f = body.element_forces();
                 -pulled_nodes.iter().map(|&i| f[i as usize][0]).sum::<Real>() as f64
             });
+        // The rest section: 1 m² in 3D, 1 m of unit depth in 2D.
+        let area: f64 = (1..DIM).map(|d| 2.0 * half[d] as f64).product();
         r.measured_young_modulus = tension
             .zip(axial)
             .filter(|(_, e)| e.abs() > 1e-6)
-            .map(|(t, e)| t / e);
+            .map(|(t, e)| t / (area * e));
         Ok(r)
     }
 }
