@@ -152,7 +152,8 @@ impl VibrationScene {
 /// The frequency and decay of a ringing signal.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Ring {
-    /// From the zero crossings, Hz (`None` under four crossings).
+    /// From the zero crossings over a whole number of periods, Hz (`None` under four
+    /// crossings).
     pub frequency: Option<f64>,
     /// From the logarithmic decrement of the extremes between crossings (`None` under three
     /// extremes, or when they do not decay monotonically in magnitude and grow instead).
@@ -177,8 +178,10 @@ impl Ring {
                 peak = 0.0;
             }
         }
+        // An even number of half-periods: about an offset, the half-periods alternate long
+        // and short, and an odd count would keep one more of one kind.
         let frequency = (crossings.len() >= 4).then(|| {
-            let n = crossings.len() - 1;
+            let n = 2 * ((crossings.len() - 1) / 2);
             n as f64 / (2.0 * (crossings[n] - crossings[0]))
         });
         // Successive extremes are half a period apart: the decrement per period is twice
@@ -215,6 +218,22 @@ mod tests {
         assert!((measured / (wd / (2.0 * std::f64::consts::PI)) - 1.0).abs() < 1e-3);
         let z = ring.damping_ratio.unwrap();
         assert!((z / zeta - 1.0).abs() < 0.02, "{z}");
+    }
+
+    #[test]
+    fn an_offset_ring_over_an_odd_count_of_half_periods_keeps_its_frequency() {
+        // 5 % off centre, 3.75 periods: 8 crossings, 7 half-periods alternating long and
+        // short. Counting all seven would be 0.6 % off; a whole number of periods is exact.
+        let f = 2.0_f64;
+        let w = 2.0 * std::f64::consts::PI * f;
+        let trace: Vec<(f64, f64)> = (1..=1875)
+            .map(|k| {
+                let t = k as f64 * 1e-3;
+                (t, (w * t).cos() + 0.05)
+            })
+            .collect();
+        let measured = Ring::of(&trace).frequency.unwrap();
+        assert!((measured / f - 1.0).abs() < 1e-3, "{measured}");
     }
 
     #[test]
