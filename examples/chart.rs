@@ -215,6 +215,17 @@ const BENDING: Metric = Metric {
     y: "relative frequency error",
 };
 
+/// The default cantilever at `res` nodes across, stepped at `dt` by `subject`.
+fn beam(res: usize, dt: Real, subject: Subject, integrator: Integrator) -> CantileverScene {
+    CantileverScene {
+        subject,
+        resolution: res,
+        dt,
+        integrator,
+        ..CantileverScene::default()
+    }
+}
+
 /// The cantilever: static sag under gravity against beam theory, at a few resolutions
 /// (nodes across the thickness); explicit at 1 ms, implicit at 60 Hz.
 fn sag(quick: bool) -> Vec<Point> {
@@ -229,14 +240,9 @@ fn sag(quick: bool) -> Vec<Point> {
         &steps,
         if quick { &[2] } else { &[2, 10] },
         |res, dt, subject, integrator| {
-            let scene = CantileverScene {
-                subject,
-                resolution: res,
-                dt,
-                integrator,
-                ..CantileverScene::default()
-            };
-            let r = scene.run().expect("the cantilever scene builds");
+            let r = beam(res, dt, subject, integrator)
+                .run()
+                .expect("the cantilever scene builds");
             let e = r.sag_error.map(f64::abs);
             (r, e)
         },
@@ -270,13 +276,9 @@ fn bending(quick: bool) -> Vec<Point> {
         if quick { &[2] } else { &[2, 10] },
         |res, dt, subject, integrator| {
             let scene = CantileverScene {
-                subject,
-                resolution: res,
-                dt,
-                integrator,
                 // Four periods of theory's 5.1 Hz.
                 seconds: 0.8,
-                ..CantileverScene::default()
+                ..beam(res, dt, subject, integrator)
             };
             let r = scene.ring().expect("the cantilever scene builds");
             let e = r
