@@ -8,7 +8,7 @@ mod cli;
 use serde_json::Value;
 
 /// Keys every line carries, with their JSON type: "s" string, "u" unsigned integer, "f" number,
-/// "f?" number or null, "b" boolean, "s?" string or null.
+/// "f?" number or null, "b" boolean, "b?" boolean or null, "s?" string or null.
 const KEYS: &[(&str, &str)] = &[
     ("scene", "s"),
     ("dim", "u"),
@@ -50,6 +50,11 @@ const KEYS: &[(&str, &str)] = &[
     ("max_interpenetration", "f?"),
     ("rest_interpenetration", "f?"),
     ("energy_gain", "f?"),
+    ("energy_over_start", "f?"),
+    ("energy_change", "f?"),
+    ("scatter", "f?"),
+    ("top_height_ratio", "f?"),
+    ("asleep", "b?"),
     ("final_speed", "f?"),
     ("pairs_wall_s", "f?"),
     ("measured_poisson", "f?"),
@@ -75,6 +80,7 @@ fn type_ok(v: &Value, t: &str) -> bool {
         "f" => v.is_number(),
         "f?" => v.is_number() || v.is_null(),
         "b" => v.is_boolean(),
+        "b?" => v.is_boolean() || v.is_null(),
         _ => false,
     }
 }
@@ -327,6 +333,26 @@ fn contact_scenes_measure_interpenetration_energy_and_cost() {
     assert!(lines
         .iter()
         .all(|l| l["pairs_wall_s"].as_f64().unwrap() >= 0.0));
+    let lines = run(&[
+        "tower",
+        "--bodies",
+        "3",
+        "--seconds",
+        "0.2",
+        "--model",
+        "edge-repulsion",
+        "rapier-volume",
+    ]);
+    assert_eq!(lines.len(), 4, "tower: two models, two dimensions");
+    for l in &lines {
+        assert_eq!(l["scene"], "tower");
+        assert_eq!(l["bodies"], 3);
+        let sinew = l["model"] == "edge-repulsion";
+        assert_eq!(l["asleep"].is_boolean(), sinew, "{l}");
+        assert!(l["scatter"].as_f64().unwrap() >= 0.0);
+        assert!(l["top_height_ratio"].as_f64().unwrap() > 0.5);
+        assert!(l["energy_over_start"].is_number() && l["energy_change"].is_number());
+    }
     let lines = run(&[
         "fold",
         "--dim",

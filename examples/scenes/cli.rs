@@ -36,6 +36,9 @@ pub enum Scene {
     Stack,
     /// Soft cubes dropped into a trimesh bowl (`--bodies`, default 10).
     Pile,
+    /// A tower of soft cubes (`--bodies`, default 6) built at rest, or dropped from `--gap`
+    /// (m) above each other.
+    Tower,
     /// A soft ball squeezed between two soft pads by a box (`--mass`, default 10 kg).
     Squeeze,
     /// A sausage folded double on a table, self contact on (`--self-contact off` to compare);
@@ -152,9 +155,12 @@ pub struct Args {
     /// `sinew_scenes::dim3::advise`).
     #[arg(long)]
     pub max_error: Option<f64>,
-    /// Damping ratio (vibration).
+    /// Damping ratio (vibration, tower).
     #[arg(long)]
     pub damping: Option<f64>,
+    /// Gap below each cube of the tower as built, m (default 0: at rest).
+    #[arg(long)]
+    pub gap: Option<f64>,
     /// `advise`: the smallest cell volume ratio allowed (default 0: no inverted cell).
     #[arg(long)]
     pub min_volume: Option<f64>,
@@ -314,6 +320,11 @@ pub fn to_json(r: &Record) -> Value {
         "measured_frequency": r.measured_frequency,
         "theory_frequency": r.theory_frequency,
         "measured_damping_ratio": r.measured_damping_ratio,
+        "energy_over_start": r.energy_over_start,
+        "energy_change": r.energy_change,
+        "scatter": r.scatter,
+        "top_height_ratio": r.top_height_ratio,
+        "asleep": r.asleep,
     });
     if let (Some(all), Value::Object(more)) = (object.as_object_mut(), contact) {
         all.extend(more);
@@ -338,6 +349,9 @@ fn table_header(scene: Scene) -> String {
         Scene::Cantilever => "  sag mm  theory mm  ratio   error  wobble",
         Scene::Stack | Scene::Pile | Scene::Squeeze => {
             " bodies  inside mm  at rest mm  E gain   speed  rest m  pairs ms/s"
+        }
+        Scene::Tower => {
+            " bodies  inside mm  at rest mm  E>start  E end  top/built  scatter mm  asleep"
         }
         Scene::Fold => "  self mm",
         Scene::Vibration => "   f Hz  theory Hz  ζ measured",
@@ -382,6 +396,17 @@ fn table_row(scene: Scene, r: &Record) -> String {
             opt(r.final_speed, 3),
             opt(r.rest_com, 3),
             opt(r.pairs_wall_s.map(|p| p * 1e3 / r.sim_s.max(1e-9)), 2)
+        ),
+        Scene::Tower => format!(
+            " {:>6}  {:>9}  {:>10}  {:>7}  {:>6}  {:>9}  {:>10}  {:>6}",
+            r.bodies.unwrap_or(0),
+            opt(r.max_interpenetration.map(|p| p * 1e3), 2),
+            opt(r.rest_interpenetration.map(|p| p * 1e3), 2),
+            opt(r.energy_over_start.map(|e| e * 100.0), 2) + "%",
+            opt(r.energy_change.map(|e| e * 100.0), 1) + "%",
+            opt(r.top_height_ratio, 3),
+            opt(r.scatter.map(|s| s * 1e3), 1),
+            r.asleep.map_or("—", |a| if a { "yes" } else { "no" })
         ),
         Scene::Fold => format!("  {:>7}", opt(r.max_self_penetration.map(|p| p * 1e3), 3)),
         Scene::Vibration => format!(
@@ -478,7 +503,7 @@ macro_rules! dimension_runner {
             use sinew_scenes::$dim::{
                 dt_sweep, BallScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
                 ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
-                StackScene, StretchScene, Subject, VibrationScene, CRUSH_MASSES,
+                StackScene, StretchScene, Subject, TowerScene, VibrationScene, CRUSH_MASSES,
             };
 
             fn fits(args: &Args) -> Result<Vec<RotationFit>, String> {
@@ -803,6 +828,38 @@ macro_rules! dimension_runner {
                                     resolution: args.res.unwrap_or(d.resolution),
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
                                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                                    ..d
+                                };
+                                out.push(scene.run().map_err(err)?);
+                            }
+                            out
+                        }
+                        Scene::Tower => {
+                            let d = TowerScene::default();
+                            let counts = if args.bodies.is_empty() {
+                                vec![d.bodies]
+                            } else {
+                                args.bodies.clone()
+                            };
+                            let mut out = Vec::new();
+                            for bodies in counts {
+                                let scene = TowerScene {
+                                    subject,
+                                    bodies,
+                                    integrator: cube.integrator,
+                                    resolution: args.res.unwrap_or(d.resolution),
+                                    gap: args.gap.map_or(d.gap, |v| v as Real),
+                                    dt: args.dt.map_or(d.dt, |v| v as Real),
+                                    seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                                    material: sinew::$dim::Material {
+                                        young_modulus: args
+                                            .young
+                                            .map_or(d.material.young_modulus, |v| v as Real),
+                                        damping_ratio: args
+                                            .damping
+                                            .map_or(d.material.damping_ratio, |v| v as Real),
+                                        ..d.material
+                                    },
                                     ..d
                                 };
                                 out.push(scene.run().map_err(err)?);

@@ -113,6 +113,18 @@ pub struct Record {
     /// its lowest value so far, over the energy at the start (stack, pile, squeeze; the box's
     /// energy not counted): energy the contacts created.
     pub energy_gain: Option<f64>,
+    /// Largest total energy (as `energy_gain` counts it) above the energy at the start, over
+    /// the start (tower): whatever the run lost first, energy it later gained back counts.
+    pub energy_over_start: Option<f64>,
+    /// Total energy at the end less at the start, over the start (tower).
+    pub energy_change: Option<f64>,
+    /// Largest horizontal distance of a body's centre of mass from the vertical axis through
+    /// the origin at the end, m (tower).
+    pub scatter: Option<f64>,
+    /// The top body's centre height at the end over its height as built (tower).
+    pub top_height_ratio: Option<f64>,
+    /// Whether every body was asleep at the end (sinew only: rapier's soft bodies do not say).
+    pub asleep: Option<bool>,
     /// Fastest node at the end, m/s.
     pub final_speed: Option<f64>,
     /// Wall time spent finding the pairs of deformables that may touch, s (sinew only: rapier's

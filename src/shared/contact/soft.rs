@@ -64,6 +64,9 @@ pub(crate) struct SoftSurface {
     /// Deeper than this behind a facet, a node is not pushed out through it: half the body's
     /// shortest surface edge at rest.
     depth_limit: Real,
+    /// Per node (zero inside), the outward surface normal at the start of the step: the
+    /// area-weighted mean of its boundary facets' normals.
+    normals: Vec<Vector>,
 }
 
 impl SoftSurface {
@@ -101,6 +104,18 @@ impl SoftSurface {
             })
             .collect();
         self.tree = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+        self.normals.clear();
+        self.normals.resize(x.len(), Vector::ZERO);
+        for f in body.rest.mesh.boundary_facets() {
+            let q: [Vector; FACET_ARITY] = std::array::from_fn(|a| x[f[a] as usize]);
+            let n = math::facet_normal(&q);
+            for &i in f {
+                self.normals[i as usize] += n;
+            }
+        }
+        for n in &mut self.normals {
+            *n = n.normalize_or_zero();
+        }
         self.depth_limit = if shortest.is_finite() {
             0.5 * shortest
         } else {
@@ -236,8 +251,23 @@ pub(crate) fn pairs(
         }
     }
     out.sort_unstable_by_key(|(a, b)| (a.into_raw_parts(), b.into_raw_parts()));
-    for h in wake {
+    // An island wakes as one: a woken body wakes the sleeping bodies it touched, and those the
+    // bodies they touched; then the pairs are found again with them awake.
+    let mut woke_more = false;
+    while let Some(h) = wake.pop() {
+        if !set[h].activation.sleeping {
+            continue;
+        }
         set[h].wake_up();
+        for &o in &set[h].last.touching_bodies {
+            if set.get(o).is_some_and(|b| b.activation.sleeping) {
+                wake.push(o);
+                woke_more = true;
+            }
+        }
+    }
+    if woke_more {
+        pairs(set, dt, sleep_speed, out);
     }
 }
 
@@ -370,11 +400,13 @@ pub(crate) fn find<'b>(
 ) {
     out.clear();
     let h = at.h;
-    let (body, _) = body_of(i);
+    let (body, own) = body_of(i);
     let n_i = node as usize;
+    let facing = own.normals.get(n_i).copied().unwrap_or(Vector::ZERO);
     let p0 = body.state.positions[n_i];
     let p1 = p0 + body.state.velocities[n_i] * h;
     let skin = at.skin;
+    let exits = nearest_exits(&body_of, (i, facing), p0, cands);
     for &(m, f) in cands {
         let (other, surface) = body_of(m as usize);
         let facet = other.rest.mesh.boundary_facets()[f as usize];
@@ -382,7 +414,7 @@ pub(crate) fn find<'b>(
         let q0: [Vector; FACET_ARITY] = std::array::from_fn(|a| x[facet[a] as usize]);
         let q1: [Vector; FACET_ARITY] = std::array::from_fn(|a| q0[a] + v[facet[a] as usize] * h);
         let n1 = math::facet_normal(&q1).normalize_or_zero();
-        if n1 == Vector::ZERO {
+        if n1 == Vector::ZERO || faces_away(i, facing, m, n1) {
             continue;
         }
         let d1 = (p1 - q1[0]).dot(n1);
@@ -399,6 +431,11 @@ pub(crate) fn find<'b>(
         // it, and stepping it out onto that plane threw it sideways: a pile of ten coarse
         // cubes gained 20 J in one step).
         if d0 < 0.0 && !inside_near_facet(other, f as usize, p0) {
+            continue;
+        }
+        // Behind, it leaves through the nearest facet only.
+        let exit = exits.iter().find(|e| e.0 == m).map_or(d0, |e| e.1);
+        if d0 < 0.0 && d0 < exit {
             continue;
         }
         // Where the node meets the facet: at the plane crossing when it crosses it within the
@@ -426,6 +463,50 @@ pub(crate) fn find<'b>(
         });
     }
     out.sort_unstable_by(|a, b| b.d0.total_cmp(&a.d0));
+}
+
+/// Per member among `cands`, the largest signed distance of `p` from the plane of one of its
+/// facets whose prism holds `p`: the nearest way out of that body when negative, and when
+/// zero or positive, `p` is outside it (on or in front of a facet). A node behind a facet
+/// leaves the body through that nearest facet only: a node lying on a cube's bottom face was
+/// inside the prism of the face beside it, 3 cm behind its plane, and stepping it out through
+/// that face threw a tower built with touching faces apart.
+fn nearest_exits<'b>(
+    body_of: &impl Fn(usize) -> (&'b Deformable, &'b SoftSurface),
+    (i, facing): (usize, Vector),
+    p: Vector,
+    cands: &[(u32, u32)],
+) -> Vec<(u32, Real)> {
+    let mut out: Vec<(u32, Real)> = Vec::new();
+    for &(m, f) in cands {
+        let (other, _) = body_of(m as usize);
+        let facet = other.rest.mesh.boundary_facets()[f as usize];
+        let q: [Vector; FACET_ARITY] =
+            std::array::from_fn(|a| other.state.positions[facet[a] as usize]);
+        let n = math::facet_normal(&q).normalize_or_zero();
+        if n == Vector::ZERO
+            || faces_away(i, facing, m, n)
+            || math::facet_barycentric(&q, p).iter().any(|&w| w < -1e-3)
+        {
+            continue;
+        }
+        let d = (p - q[0]).dot(n);
+        match out.iter_mut().find(|e| e.0 == m) {
+            Some(e) => e.1 = e.1.max(d),
+            None => out.push((m, d)),
+        }
+    }
+    out
+}
+
+/// Whether a facet of member `m` with unit normal `n` faces the same way as the surface of
+/// member `i` at a node whose outward normal is `facing`: two surfaces in contact face each
+/// other, so such a facet is not the node's to meet. Where two stacked cubes' side faces are
+/// flush, each one's edge nodes lie on the other's side facets; meeting them pushed those nodes
+/// sideways every substep and the tower never came to rest. (Within one body, a crumpled
+/// surface's node normals say little: self contact does not use this test.)
+fn faces_away(i: usize, facing: Vector, m: u32, n: Vector) -> bool {
+    m as usize != i && facing.dot(n) > 0.0
 }
 
 /// Whether `p` is inside (or on) a cell of `body` around its boundary facet `f` (one that

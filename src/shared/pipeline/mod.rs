@@ -439,9 +439,43 @@ fn step_group<'a>(
     };
     substep::run(&integrator, members, soft, ctx, bodies);
     record_touching(members);
-    for (m, detached) in members.iter_mut().zip(detached) {
-        finish_member(m, ctx, bodies, events, detached, report);
+    let mut ready = Vec::with_capacity(members.len());
+    for m in members.iter_mut() {
+        ready.push(check_member(m, ctx, bodies));
     }
+    // The group is one island: its live members fall asleep together, once every one of them
+    // has been still long enough (one by one, a sleeping cube was woken by its neighbour's
+    // last settling and a tower never slept).
+    let island_sleeps = members
+        .iter()
+        .zip(&ready)
+        .all(|(m, ready)| !m.live || *ready == Some(true));
+    for ((m, detached), ready) in members.iter_mut().zip(detached).zip(ready) {
+        let sleeps = island_sleeps && ready == Some(true);
+        finish_member(m, ctx, bodies, events, (detached, sleeps), report);
+    }
+}
+
+/// Phases 4–5 of a live member's step and its still time (phase 6); whether it has been still
+/// long enough to sleep (`None` for a member not simulated this step).
+fn check_member(
+    m: &mut Member<'_, '_>,
+    ctx: &StepContext<'_>,
+    bodies: &mut RigidBodySet,
+) -> Option<bool> {
+    if !m.live {
+        return None;
+    }
+    let (body, sc) = (&mut *m.body, &mut *m.sc);
+    let integrate_start = Instant::now();
+    // 4. containment
+    let quality = containment::contain(body, ctx, bodies, sc);
+    body.refit_surface();
+    // 5. report
+    finish::diagnose(body, sc, &m.candidates, m.stats, quality);
+    let ready = sleep::update(body, ctx, bodies, sc, quality.is_some());
+    m.times.integrate = integrate_start.elapsed().as_secs_f64();
+    Some(ready)
 }
 
 /// The deformables each live member touched this step (either's node on the other's facet).
@@ -499,13 +533,14 @@ fn soft_tables(members: &mut [Member<'_, '_>], i: usize, ctx: &StepContext<'_>) 
     members[i].sc.soft_cands = cands;
 }
 
-/// Phases 4–7 of a member's step (or the report of one that slept or is frozen).
+/// Phases 6–7 of a member's step after [`check_member`] (or the report of one that slept or is
+/// frozen); `sleeps`: its island falls asleep.
 fn finish_member(
     m: &mut Member<'_, '_>,
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
     events: &dyn DeformableEventHandler,
-    detached: usize,
+    (detached, sleeps): (usize, bool),
     report: &mut StepReport,
 ) {
     let (handle, body, sc) = (m.handle, &mut *m.body, &mut *m.sc);
@@ -517,15 +552,12 @@ fn finish_member(
     if m.live {
         let times = &mut m.times;
         let integrate_start = Instant::now();
-        // 4. containment
-        let quality = containment::contain(body, ctx, bodies, sc);
-        body.refit_surface();
-        // 5. report
-        finish::diagnose(body, sc, &m.candidates, m.stats, quality);
         // 6. sleep
-        sleep::update(body, ctx, bodies, sc, quality.is_some());
+        if sleeps {
+            sleep::fall_asleep(body, ctx, bodies, sc);
+        }
         finish::energies(body, ctx);
-        times.integrate = integrate_start.elapsed().as_secs_f64();
+        times.integrate += integrate_start.elapsed().as_secs_f64();
         finish::timings(body, times);
     } else {
         body.last.report.substeps = 0;

@@ -120,15 +120,17 @@ fn disturbed(
     woken
 }
 
-/// After a simulated step: a body still long enough (every free node slower than
-/// `sleep_speed`, no bone or nearby body moving, its state `sane`) falls asleep, at rest.
+/// After a simulated step: counts how long the body has been still (every free node slower
+/// than `sleep_speed`, no bone or nearby body moving, its state `sane`); returns whether it has
+/// been still long enough to sleep. It falls asleep ([`fall_asleep`]) with the bodies it may
+/// touch, as one island, once all of them have.
 pub(super) fn update(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
-    bodies: &mut RigidBodySet,
-    sc: &mut Scratch,
+    bodies: &RigidBodySet,
+    sc: &Scratch,
     sane: bool,
-) {
+) -> bool {
     // A dynamic body it holds may be awake: resting on the deformable, it sleeps with it.
     let quiet = sc.motions.iter().all(|m| {
         bodies
@@ -144,14 +146,22 @@ pub(super) fn update(
     } else {
         body.activation.still_time = 0.0;
     }
-    if body.activation.still_time >= ctx.settings.time_until_sleep {
-        body.activation.sleeping = true;
-        body.state.velocities.fill(Vector::ZERO);
-        held_bodies(body, ctx, &mut sc.held);
-        for h in &sc.held {
-            if let Some(rb) = bodies.get_mut(*h).filter(|b| b.is_dynamic()) {
-                rb.sleep();
-            }
+    body.activation.still_time >= ctx.settings.time_until_sleep
+}
+
+/// Puts a body to sleep, at rest, with the dynamic bodies it touched or is bound to.
+pub(super) fn fall_asleep(
+    body: &mut Deformable,
+    ctx: &StepContext<'_>,
+    bodies: &mut RigidBodySet,
+    sc: &mut Scratch,
+) {
+    body.activation.sleeping = true;
+    body.state.velocities.fill(Vector::ZERO);
+    held_bodies(body, ctx, &mut sc.held);
+    for h in &sc.held {
+        if let Some(rb) = bodies.get_mut(*h).filter(|b| b.is_dynamic()) {
+            rb.sleep();
         }
     }
 }

@@ -46,7 +46,7 @@ pub use cantilever::{CantileverScene, SETTLED_WOBBLE};
 pub use crush::{CrushScene, CRUSH_MASSES};
 pub use fall::{dt_sweep, FallScene, DT_SWEEP_MS};
 pub use fall_reference::{FallReference, ReferenceRun, FALL_REFERENCE_PATH};
-pub use flock::{PileScene, SqueezeScene, StackScene};
+pub use flock::{PileScene, SqueezeScene, StackScene, TowerScene};
 pub use fold::FoldScene;
 pub use limb::LimbScene;
 pub use manipulator::ManipulatorScene;
