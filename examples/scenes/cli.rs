@@ -41,6 +41,9 @@ pub enum Scene {
     Tower,
     /// A soft ball squeezed between two soft pads by a box (`--mass`, default 10 kg).
     Squeeze,
+    /// Soft pads on two kinematic fingers pinch a dynamic box and lift it 0.2 m (`--mass`,
+    /// default 0.2 kg; one run per mass).
+    Pinch,
     /// A sausage folded double on a table, self contact on (`--self-contact off` to compare);
     /// `--seconds` is the fold and the hold together.
     Fold,
@@ -325,6 +328,9 @@ pub fn to_json(r: &Record) -> Value {
         "scatter": r.scatter,
         "top_height_ratio": r.top_height_ratio,
         "asleep": r.asleep,
+        "slip": r.slip,
+        "overspeed": r.overspeed,
+        "step_spike": r.step_spike,
     });
     if let (Some(all), Value::Object(more)) = (object.as_object_mut(), contact) {
         all.extend(more);
@@ -350,6 +356,7 @@ fn table_header(scene: Scene) -> String {
         Scene::Stack | Scene::Pile | Scene::Squeeze => {
             " bodies  inside mm  at rest mm  E gain   speed  rest m  pairs ms/s"
         }
+        Scene::Pinch => "  mass kg  slip mm  overspeed  floor mm  box m  spike",
         Scene::Tower => {
             " bodies  inside mm  at rest mm  E>start  E end  top/built  scatter mm  asleep"
         }
@@ -396,6 +403,15 @@ fn table_row(scene: Scene, r: &Record) -> String {
             opt(r.final_speed, 3),
             opt(r.rest_com, 3),
             opt(r.pairs_wall_s.map(|p| p * 1e3 / r.sim_s.max(1e-9)), 2)
+        ),
+        Scene::Pinch => format!(
+            "  {:>7}  {:>7}  {:>9}  {:>8}  {:>5}  {:>5}",
+            opt(r.mass, 2),
+            opt(r.slip.map(|s| s * 1e3), 2),
+            opt(r.overspeed, 3),
+            opt(r.max_penetration.map(|p| p * 1e3), 2),
+            opt(r.rest_com, 3),
+            opt(r.step_spike, 1)
         ),
         Scene::Tower => format!(
             " {:>6}  {:>9}  {:>10}  {:>7}  {:>6}  {:>9}  {:>10}  {:>6}",
@@ -503,7 +519,8 @@ macro_rules! dimension_runner {
             use sinew_scenes::$dim::{
                 dt_sweep, BallScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
                 ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
-                StackScene, StretchScene, Subject, TowerScene, VibrationScene, CRUSH_MASSES,
+                PinchScene, StackScene, StretchScene, Subject, TowerScene, VibrationScene,
+                CRUSH_MASSES,
             };
 
             fn fits(args: &Args) -> Result<Vec<RotationFit>, String> {
@@ -858,6 +875,32 @@ macro_rules! dimension_runner {
                                         damping_ratio: args
                                             .damping
                                             .map_or(d.material.damping_ratio, |v| v as Real),
+                                        ..d.material
+                                    },
+                                    ..d
+                                };
+                                out.push(scene.run().map_err(err)?);
+                            }
+                            out
+                        }
+                        Scene::Pinch => {
+                            let d = PinchScene::default();
+                            let masses = if args.mass.is_empty() {
+                                vec![d.mass as f64]
+                            } else {
+                                args.mass.clone()
+                            };
+                            let mut out = Vec::new();
+                            for mass in masses {
+                                let scene = PinchScene {
+                                    subject,
+                                    mass: mass as Real,
+                                    integrator: cube.integrator,
+                                    dt: args.dt.map_or(d.dt, |v| v as Real),
+                                    material: sinew::$dim::Material {
+                                        young_modulus: args
+                                            .young
+                                            .map_or(d.material.young_modulus, |v| v as Real),
                                         ..d.material
                                     },
                                     ..d

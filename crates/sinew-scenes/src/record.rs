@@ -121,10 +121,18 @@ pub struct Record {
     /// Largest horizontal distance of a body's centre of mass from the vertical axis through
     /// the origin at the end, m (tower).
     pub scatter: Option<f64>,
-    /// The top body's centre height at the end over its height as built (tower).
+    /// The top body's centre height at the end over its height in the tower stacked at rest
+    /// (tower; dropped or not).
     pub top_height_ratio: Option<f64>,
     /// Whether every body was asleep at the end (sinew only: rapier's soft bodies do not say).
     pub asleep: Option<bool>,
+    /// Largest vertical slip of the held box against the fingers over the lift and the hold,
+    /// m (pinch).
+    pub slip: Option<f64>,
+    /// Largest speed of the box relative to the fingers' mean motion, m/s (pinch).
+    pub overspeed: Option<f64>,
+    /// The slowest step's wall time over the median step's (pinch).
+    pub step_spike: Option<f64>,
     /// Fastest node at the end, m/s.
     pub final_speed: Option<f64>,
     /// Wall time spent finding the pairs of deformables that may touch, s (sinew only: rapier's

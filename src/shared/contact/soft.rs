@@ -537,90 +537,191 @@ pub(crate) struct Still {
     pub facet: bool,
 }
 
-/// Solves a contact [`find`] found between `node` of `body` and a facet of `other` (a still
-/// side gives no way; not both), on the velocities as the contacts solved before it left them;
-/// returns whether an impulse was applied.
-pub(crate) fn resolve(
-    body: &mut Deformable,
+/// A contact [`find`] found between a node and a facet (of another body, or of the node's own
+/// with self contact), solved on velocities: its normal impulse non-negative and never more
+/// than reaches the target, friction in Coulomb's disc of `μ` times it and no more than stops
+/// the slip. The impulses accumulate over calls of [`SoftRow::solve`] (projected Gauss–Seidel);
+/// a substep solves each row once (more passes fed a tower's sway: `docs/ARCHITECTURE.md`
+/// §6.6).
+#[derive(Clone, Debug)]
+pub(crate) struct SoftRow {
+    /// The members of the node and of the facet (the same with self contact).
+    pub node_member: usize,
+    pub facet_member: usize,
     node: u32,
-    other: &mut Deformable,
+    /// Inverse masses of the node and of the facet's nodes (zero: still, or held by a bone).
+    w_node: Real,
+    facet: [u32; FACET_ARITY],
+    weights: [Real; FACET_ARITY],
+    w_facet: [Real; FACET_ARITY],
+    normal: Vector,
+    /// Effective inverse mass along any direction, `1/m_i + Σ w_j²/m_j`.
+    k: Real,
+    /// Normal relative velocity to reach.
+    target: Real,
+    friction: Real,
+    normal_impulse: Real,
+    friction_impulse: Vector,
+}
+
+/// The contact coefficients of a pair: friction and restitution of `a` and `b` combined by
+/// rapier's rules.
+fn combined(a: &Deformable, b: &Deformable) -> (Real, Real) {
+    let (a, b) = (&a.contact, &b.contact);
+    let friction = CoefficientCombineRule::combine(
+        a.friction,
+        b.friction,
+        a.friction_combine_rule,
+        b.friction_combine_rule,
+    );
+    let restitution = CoefficientCombineRule::combine(
+        a.restitution,
+        b.restitution,
+        a.restitution_combine_rule,
+        b.restitution_combine_rule,
+    );
+    (friction, restitution)
+}
+
+fn inv_mass_of(b: &Deformable, j: u32) -> Real {
+    if b.is_attached(j) {
+        0.0
+    } else {
+        b.rest.inv_masses[j as usize]
+    }
+}
+
+/// The row of a contact [`find`] found between `node` of member `i` (`body`) and a facet of
+/// member `hit.other` (`other`; `None` with self contact), a still side giving no way (not
+/// both); steps a node found behind the facet out onto its plane. `None` when neither side can
+/// move.
+pub(crate) fn row(
+    (i, body): (usize, &mut Deformable),
+    node: u32,
+    other: Option<&Deformable>,
     still: Still,
     hit: &SoftHit,
     at: &Substep<'_>,
-) -> bool {
-    let i = node as usize;
-    let inv_of = |b: &Deformable, j: u32| {
-        if b.is_attached(j) {
-            0.0
-        } else {
-            b.rest.inv_masses[j as usize]
-        }
+) -> Option<SoftRow> {
+    let n_i = node as usize;
+    let w_node = if still.node {
+        0.0
+    } else {
+        inv_mass_of(body, node)
     };
-    let w_node = if still.node { 0.0 } else { inv_of(body, node) };
+    let facet_body = other.unwrap_or(body);
     let w_facet: [Real; FACET_ARITY] = std::array::from_fn(|a| {
         if still.facet {
             0.0
         } else {
-            inv_of(other, hit.facet[a])
+            inv_mass_of(facet_body, hit.facet[a])
         }
     });
     let k = hit.inverse_mass(w_node, &w_facet);
     if k <= 0.0 {
-        return false;
+        return None;
     }
-    // A node found behind the facet starts the substep on it (a still one stays: the facet
-    // is pushed off it over the next substeps).
-    let d0 = if still.node {
-        hit_depth(body.state.positions[i], hit)
-    } else {
-        step_out(&mut body.state.positions[i], hit)
-    };
+    let (friction, restitution) = combined(body, facet_body);
     let facet_velocity = |vel: &[Vector]| -> Vector {
         (0..FACET_ARITY)
             .map(|a| vel[hit.facet[a] as usize] * hit.weights[a])
             .sum()
     };
-    let c = (&body.contact, &other.contact);
-    let friction = CoefficientCombineRule::combine(
-        c.0.friction,
-        c.1.friction,
-        c.0.friction_combine_rule,
-        c.1.friction_combine_rule,
-    );
-    let restitution = CoefficientCombineRule::combine(
-        c.0.restitution,
-        c.1.restitution,
-        c.0.restitution_combine_rule,
-        c.1.restitution_combine_rule,
-    );
-    let approach = (body.step.scratch_velocities[i]
-        - facet_velocity(&other.step.scratch_velocities))
-    .dot(hit.normal);
-    let rel = body.state.velocities[i] - facet_velocity(&other.state.velocities);
-    let impulse = contact_impulse(hit, d0, k, approach, rel, (friction, restitution), at);
-    if impulse == Vector::ZERO {
-        return false;
-    }
-    // A still side gives no way; a push that would move it faster than it may sleep at wakes
-    // it for the next step.
-    let wake = |b: &mut Deformable, j: u32| {
-        if impulse.length() * inv_of(b, j) > at.restitution_threshold {
-            b.wake_up();
-        }
+    let before = &facet_body.step.scratch_velocities;
+    let approach = (body.step.scratch_velocities[n_i] - facet_velocity(before)).dot(hit.normal);
+    // A node found behind the facet starts the substep on it (a still one stays: the facet
+    // is pushed off it over the next substeps).
+    let d0 = if still.node {
+        hit_depth(body.state.positions[n_i], hit)
+    } else {
+        step_out(&mut body.state.positions[n_i], hit)
     };
-    if still.node {
-        wake(body, node);
+    // Close the gap down to the skin; within the skin, stop approaching and leave it slowly (a
+    // tenth of the way per substep: pushing out at once pumped a stacked pair into rocking).
+    let gap = d0 - at.skin;
+    let mut target = if gap >= 0.0 {
+        -gap / at.h
     } else {
-        body.state.velocities[i] += impulse * w_node;
+        -0.1 * gap / at.h
+    };
+    if -approach > at.restitution_threshold && restitution > 0.0 {
+        target = target.max(-restitution * approach);
     }
-    if still.facet {
-        wake(other, hit.facet[0]);
-    } else {
-        for ((&j, &w), &inv) in hit.facet.iter().zip(&hit.weights).zip(&w_facet) {
-            other.state.velocities[j as usize] -= impulse * (w * inv);
+    Some(SoftRow {
+        node_member: i,
+        facet_member: hit.other,
+        node,
+        w_node,
+        facet: hit.facet,
+        weights: hit.weights,
+        w_facet,
+        normal: hit.normal,
+        k,
+        target,
+        friction,
+        normal_impulse: 0.0,
+        friction_impulse: Vector::ZERO,
+    })
+}
+
+impl SoftRow {
+    /// One projected Gauss–Seidel update of the row on the node's velocities `node_v` and the
+    /// facet's `facet_v` (`None`: the same body's); returns the impulse it added on the node
+    /// (the facet took its reverse).
+    pub fn solve(&mut self, node_v: &mut [Vector], facet_v: Option<&mut [Vector]>) -> Vector {
+        let n = self.normal;
+        let i = self.node as usize;
+        let facet_velocity = |vel: &[Vector]| -> Vector {
+            (0..FACET_ARITY)
+                .map(|a| vel[self.facet[a] as usize] * self.weights[a])
+                .sum()
+        };
+        let relative = |node_v: &[Vector], facet_v: Option<&[Vector]>| {
+            node_v[i] - facet_velocity(facet_v.unwrap_or(node_v))
+        };
+        let mut facet_v = facet_v;
+        let rel = relative(node_v, facet_v.as_deref());
+        let total = (self.normal_impulse + (self.target - rel.dot(n)) / self.k).max(0.0);
+        let mut impulse = n * (total - self.normal_impulse);
+        self.normal_impulse = total;
+        if self.friction > 0.0 {
+            let after = rel + impulse * self.k;
+            let slip = after - n * after.dot(n);
+            let mut friction = self.friction_impulse - slip / self.k;
+            let limit = self.friction * self.normal_impulse;
+            let len = friction.length();
+            if len > limit {
+                friction *= limit / len;
+            }
+            impulse += friction - self.friction_impulse;
+            self.friction_impulse = friction;
         }
+        if impulse == Vector::ZERO {
+            return impulse;
+        }
+        node_v[i] += impulse * self.w_node;
+        let facet_side = match facet_v.as_deref_mut() {
+            Some(v) => v,
+            None => node_v,
+        };
+        for ((&j, &w), &inv) in self.facet.iter().zip(&self.weights).zip(&self.w_facet) {
+            facet_side[j as usize] -= impulse * (w * inv);
+        }
+        impulse
     }
-    true
+
+    /// Whether the impulse of a first [`SoftRow::solve`] would move a still side faster than
+    /// `speed` (then that body wakes for the next step): `(node side, facet side)`.
+    pub fn wakes(
+        &self,
+        impulse: Vector,
+        node: &Deformable,
+        facet: &Deformable,
+        speed: Real,
+    ) -> (bool, bool) {
+        let fast = |b: &Deformable, j: u32| impulse.length() * inv_mass_of(b, j) > speed;
+        (fast(node, self.node), fast(facet, self.facet[0]))
+    }
 }
 
 /// The distance of a node at `x` from the plane of `hit`'s facet at the substep's start
@@ -642,85 +743,6 @@ fn step_out(x: &mut Vector, hit: &SoftHit) -> Real {
     let shift = (-d).min(hit.depth_limit);
     *x += hit.normal * shift;
     d + shift
-}
-
-/// The impulse on the node (the facet takes its reverse) of a contact `d0` off the facet's
-/// plane, with effective inverse mass `k`, normal approach speed `approach` before this
-/// substep's forces, relative velocity `rel` now, and the pair's friction and restitution.
-fn contact_impulse(
-    hit: &SoftHit,
-    d0: Real,
-    k: Real,
-    approach: Real,
-    rel: Vector,
-    (friction, restitution): (Real, Real),
-    at: &Substep<'_>,
-) -> Vector {
-    let (h, skin, n) = (at.h, at.skin, hit.normal);
-    // Close the gap down to the skin; within the skin, stop approaching and leave it slowly (a
-    // tenth of the way per substep: pushing out at once pumped a stacked pair into rocking).
-    let gap = d0 - skin;
-    let mut target = if gap >= 0.0 { -gap / h } else { -0.1 * gap / h };
-    if -approach > at.restitution_threshold && restitution > 0.0 {
-        target = target.max(-restitution * approach);
-    }
-    let vn = rel.dot(n);
-    let normal_impulse = ((target - vn) / k).max(0.0);
-    let mut impulse = n * normal_impulse;
-    if friction > 0.0 {
-        let after = rel + n * (normal_impulse * k);
-        let vt = after - n * after.dot(n);
-        let slip = vt.length();
-        if slip > 0.0 {
-            impulse -= vt * ((slip / k).min(friction * normal_impulse) / slip);
-        }
-    }
-    impulse
-}
-
-/// Solves a contact [`find`] found between `node` of `body` and one of the body's own facets
-/// (self contact): as [`resolve`], both sides in the one body, with its own coefficients.
-pub(crate) fn resolve_self(
-    body: &mut Deformable,
-    node: u32,
-    hit: &SoftHit,
-    at: &Substep<'_>,
-) -> bool {
-    let i = node as usize;
-    let n = hit.normal;
-    let inv_of = |j: u32| {
-        if body.is_attached(j) {
-            0.0
-        } else {
-            body.rest.inv_masses[j as usize]
-        }
-    };
-    let w_node = inv_of(node);
-    let w_facet: [Real; FACET_ARITY] = std::array::from_fn(|a| inv_of(hit.facet[a]));
-    let k = hit.inverse_mass(w_node, &w_facet);
-    if k <= 0.0 {
-        return false;
-    }
-    let d0 = step_out(&mut body.state.positions[i], hit);
-    let relative = |vel: &[Vector]| -> Vector {
-        vel[i]
-            - (0..FACET_ARITY)
-                .map(|a| vel[hit.facet[a] as usize] * hit.weights[a])
-                .sum::<Vector>()
-    };
-    let approach = relative(&body.step.scratch_velocities).dot(n);
-    let rel = relative(&body.state.velocities);
-    let c = &body.contact;
-    let impulse = contact_impulse(hit, d0, k, approach, rel, (c.friction, c.restitution), at);
-    if impulse == Vector::ZERO {
-        return false;
-    }
-    let v = &mut body.state.velocities;
-    v[i] += impulse * w_node;
-    for ((&j, &w), &inv) in hit.facet.iter().zip(&hit.weights).zip(&w_facet) {
-        v[j as usize] -= impulse * (w * inv);
-    }
-    true
 }
 
 #[cfg(test)]

@@ -109,6 +109,7 @@ pub(super) fn run(
             let at = substep_at(ctx, 0.0, h, t, &[]);
             soft_contacts(members, &at, substeps % 2 == 1);
         }
+
         for &i in &live {
             let m = &mut members[i];
             let body = &mut *m.body;
@@ -423,7 +424,7 @@ fn facet_contacts(
 
 /// Every free surface node of each member against the surface facets of the other members
 /// (one side at least live), and its own with self contact (see
-/// [`soft`](super::super::contact::soft)).
+/// [`soft`](super::super::contact::soft)): each contact found is solved at once.
 fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: bool) {
     let mut hits = Vec::new();
     for i in 0..members.len() {
@@ -446,7 +447,10 @@ fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: boo
             let still = !members[i].live;
             hits.retain(|h| !still || (h.other != i && members[h.other].live));
             for hit in hits.drain(..) {
-                if solve_soft(members, i, node, &hit, at) {
+                let Some(mut row) = new_row(members, i, node, &hit, at) else {
+                    continue;
+                };
+                if solve_row(members, &mut row, Some(at.restitution_threshold)) {
                     let other = hit.other;
                     let m = &mut members[i];
                     if other == i {
@@ -463,23 +467,58 @@ fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: boo
     }
 }
 
-/// Solves one contact `find` found for `node` of member `i`; whether an impulse was applied.
-fn solve_soft(
+/// The row of a contact `find` found for `node` of member `i`.
+fn new_row(
     members: &mut [Member<'_, '_>],
     i: usize,
     node: u32,
     hit: &soft::SoftHit,
     at: &Substep<'_>,
-) -> bool {
+) -> Option<soft::SoftRow> {
     if hit.other == i {
-        return soft::resolve_self(members[i].body, node, hit, at);
+        let still = soft::Still {
+            node: false,
+            facet: false,
+        };
+        return soft::row((i, members[i].body), node, None, still, hit, at);
     }
     let (a, b) = pair_mut(members, i, hit.other);
     let still = soft::Still {
         node: !a.live,
         facet: !b.live,
     };
-    soft::resolve(a.body, node, b.body, still, hit, at)
+    soft::row((i, a.body), node, Some(b.body), still, hit, at)
+}
+
+/// One update of a soft row on its members' velocities; whether it applied an impulse. With
+/// `wake_speed` (its first update), a still side it would push faster than that wakes for the
+/// next step.
+fn solve_row(
+    members: &mut [Member<'_, '_>],
+    row: &mut soft::SoftRow,
+    wake_speed: Option<Real>,
+) -> bool {
+    let (i, j) = (row.node_member, row.facet_member);
+    let impulse = if i == j {
+        row.solve(&mut members[i].body.state.velocities, None)
+    } else {
+        let (a, b) = pair_mut(members, i, j);
+        let impulse = row.solve(
+            &mut a.body.state.velocities,
+            Some(&mut b.body.state.velocities),
+        );
+        if let Some(speed) = wake_speed {
+            let (node, facet) = row.wakes(impulse, a.body, b.body, speed);
+            if node && !a.live {
+                a.body.wake_up();
+            }
+            if facet && !b.live {
+                b.body.wake_up();
+            }
+        }
+        impulse
+    };
+    impulse != Vector::ZERO
 }
 
 /// Two distinct elements of a slice, mutably.

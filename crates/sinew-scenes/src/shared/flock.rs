@@ -16,7 +16,8 @@ use super::super::lib::Material;
 use super::fall::cuboid;
 use super::metrics::interpenetration;
 use super::sim::{
-    insert_soft, lumped_masses, read_state, rest_positions, BodySpec, Soft, RAPIER_SKIN,
+    drive_pins, insert_soft, lumped_masses, pins_of, read_state, rest_positions, BodySpec, Pin,
+    Soft, RAPIER_SKIN,
 };
 use super::subject::Subject;
 use super::Record;
@@ -24,6 +25,7 @@ use super::Record;
 /// One body of a [`Flock`].
 struct Member {
     soft: Soft,
+    pins: Vec<Pin>,
     mesh: Mesh,
     masses: Vec<Real>,
     x: Vec<Vector>,
@@ -54,9 +56,12 @@ impl Flock {
         for spec in &specs {
             let masses = lumped_masses(&spec.mesh, &spec.material);
             let rest = rest_positions(spec);
-            let soft = insert_soft(&mut world, subject, spec, &rest, &masses, &[], None)?;
+            let pins = pins_of(&world, spec, &rest)?;
+            let pinned: Vec<u32> = pins.iter().map(|p| p.node).collect();
+            let soft = insert_soft(&mut world, subject, spec, &rest, &masses, &pinned, None)?;
             members.push(Member {
                 soft,
+                pins,
                 mesh: spec.mesh.clone(),
                 masses,
                 v: vec![Vector::ZERO; rest.len()],
@@ -84,6 +89,9 @@ impl Flock {
             .physics
             .integration_parameters
             .num_solver_iterations;
+        for m in &self.members {
+            drive_pins(&mut self.world, m.soft, &m.pins);
+        }
         let t0 = Instant::now();
         let report = self.world.step();
         let wall = t0.elapsed().as_secs_f64();
@@ -168,6 +176,11 @@ impl Flock {
                             .sum::<Real>()
                 })
                 .sum::<Real>()
+    }
+
+    /// Whether a body blew up (or turned non-finite).
+    pub fn exploded(&self) -> bool {
+        self.exploded || self.nan
     }
 
     /// The fastest node of any body, m/s.
@@ -730,7 +743,12 @@ impl TowerScene {
     pub fn run(&self) -> Result<Record, BuildError> {
         let mut flock = self.flock()?;
         let top = self.bodies.saturating_sub(1);
-        let built = flock.com_height(top);
+        // The top's height stacked at rest, whatever the gaps it was dropped from.
+        let skin = match self.subject {
+            Subject::Sinew(_) => 0.0,
+            Subject::Rapier(_) => RAPIER_SKIN,
+        };
+        let built = skin + top as Real * (self.size + 2.0 * skin) + 0.5 * self.size;
         let watch = Watch::run(&mut flock, self.dt, self.seconds, 1, |_| {});
         let mut r = flock.record("tower", self.resolution);
         r.young = self.material.young_modulus as f64;

@@ -18,6 +18,8 @@
 //! | [`CantileverScene`] | (accuracy) static sag against Euler–Bernoulli; fails only if it does not settle | — |
 //! | [`StackScene`], [`PileScene`], [`SqueezeScene`] | a cell inverts, or bodies rest inside each other by over 1 % of their size | — |
 //! | [`VibrationScene`] | (accuracy) a free bar's first axial frequency and decay; fails if it explodes, inverts or does not ring | — |
+//! | [`TowerScene`] | a cell inverts, or bodies rest inside each other by over 1 % of their size | — |
+//! | [`PinchScene`] | the box slips over 5 cm, goes over 1 cm into the ground, or a cell inverts | — |
 //! | [`FoldScene`] | the surface passes into itself (over 1 % of a cell) or a cell inverts | — |
 
 pub mod advise;
@@ -31,6 +33,7 @@ mod fold;
 mod limb;
 mod manipulator;
 pub mod metrics;
+mod pinch;
 mod rotation_error;
 mod sim;
 mod stretch;
@@ -50,6 +53,7 @@ pub use flock::{PileScene, SqueezeScene, StackScene, TowerScene};
 pub use fold::FoldScene;
 pub use limb::LimbScene;
 pub use manipulator::ManipulatorScene;
+pub use pinch::PinchScene;
 pub use rotation_error::{spurious_acceleration, RotationErrorScene};
 pub use sim::{Sim, RAPIER_SKIN};
 pub use stretch::StretchScene;

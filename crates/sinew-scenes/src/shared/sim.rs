@@ -30,8 +30,8 @@ pub(crate) enum Soft {
 
 /// A node of a rapier soft body pinned to a rigid body at a point of the body's frame.
 #[derive(Copy, Clone, Debug)]
-struct Pin {
-    node: u32,
+pub(crate) struct Pin {
+    pub node: u32,
     body: RigidBodyHandle,
     local: Vector,
 }
@@ -228,6 +228,54 @@ pub(crate) fn read_state(
     (!finite, !finite || far)
 }
 
+/// The pins of `spec` (its nodes bound to rigid bodies at their rest positions `rest`), each
+/// with its anchor in its body's frame.
+pub(crate) fn pins_of(
+    world: &DeformableWorld,
+    spec: &BodySpec,
+    rest: &[Vector],
+) -> Result<Vec<Pin>, BuildError> {
+    let mut pins = Vec::new();
+    for (body, nodes) in &spec.pins {
+        let pose = *world
+            .physics
+            .bodies
+            .get(*body)
+            .ok_or_else(|| attach_error(&AttachError::NoSuchBody(*body)))?
+            .position();
+        for &node in nodes {
+            let p = rest.get(node as usize).copied().ok_or_else(|| {
+                attach_error(&AttachError::NodeOutOfRange {
+                    node,
+                    nodes: rest.len(),
+                })
+            })?;
+            pins.push(Pin {
+                node,
+                body: *body,
+                local: pose.inverse_transform_point(p),
+            });
+        }
+    }
+    Ok(pins)
+}
+
+/// rapier's pinned particles are kinematic: moves those of `soft` (if it is rapier's) to where
+/// their bones will be at the end of the coming step. (sinew's bindings follow on their own.)
+pub(crate) fn drive_pins(world: &mut DeformableWorld, soft: Soft, pins: &[Pin]) {
+    if let Soft::Rapier(h) = soft {
+        let w = &mut world.physics;
+        if let Some(sb) = w.soft_bodies.get_mut(h) {
+            for pin in pins {
+                if let Some(b) = w.bodies.get(pin.body) {
+                    let target = b.next_position().transform_point(pin.local);
+                    sb.set_particle_kinematic_target(pin.node as usize, target);
+                }
+            }
+        }
+    }
+}
+
 fn cell_kind_error(kind: CellKind) -> BuildError {
     BuildError::UnsupportedCells {
         model: "rapier soft body",
@@ -248,26 +296,7 @@ impl Sim {
         let n = spec.mesh.nodes().len();
         let masses = lumped_masses(&spec.mesh, &spec.material);
         let rest = rest_positions(&spec);
-        let mut pins = Vec::new();
-        for (body, nodes) in &spec.pins {
-            let pose = *world
-                .physics
-                .bodies
-                .get(*body)
-                .ok_or_else(|| attach_error(&AttachError::NoSuchBody(*body)))?
-                .position();
-            for &node in nodes {
-                let p = rest
-                    .get(node as usize)
-                    .copied()
-                    .ok_or_else(|| attach_error(&AttachError::NodeOutOfRange { node, nodes: n }))?;
-                pins.push(Pin {
-                    node,
-                    body: *body,
-                    local: pose.inverse_transform_point(p),
-                });
-            }
-        }
+        let pins = pins_of(&world, &spec, &rest)?;
         let pinned: Vec<u32> = pins.iter().map(|p| p.node).collect();
         let soft = insert_soft(
             &mut world,
@@ -336,18 +365,7 @@ impl Sim {
 
     /// One step of the world; returns the wall time it took, s.
     pub fn step(&mut self) -> f64 {
-        // rapier's pinned particles are kinematic: move them to where their bone will be.
-        if let Soft::Rapier(h) = self.soft {
-            let w = &mut self.world.physics;
-            if let Some(sb) = w.soft_bodies.get_mut(h) {
-                for pin in &self.pins {
-                    if let Some(b) = w.bodies.get(pin.body) {
-                        let target = b.next_position().transform_point(pin.local);
-                        sb.set_particle_kinematic_target(pin.node as usize, target);
-                    }
-                }
-            }
-        }
+        drive_pins(&mut self.world, self.soft, &self.pins);
         let t0 = Instant::now();
         let report = self.world.step();
         let wall = t0.elapsed().as_secs_f64();
