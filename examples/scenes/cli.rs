@@ -158,7 +158,7 @@ pub struct Args {
     /// `sinew_scenes::dim3::advise`).
     #[arg(long)]
     pub max_error: Option<f64>,
-    /// Damping ratio (vibration, tower).
+    /// Damping ratio (vibration, tower, pinch).
     #[arg(long)]
     pub damping: Option<f64>,
     /// Gap below each cube of the tower as built, m (default 0: at rest).
@@ -507,14 +507,23 @@ fn table_row(scene: Scene, r: &Record) -> String {
     )
 }
 
+/// The values a list option was given, or the default alone.
+fn or_default<T: Clone>(given: &[T], default: T) -> Vec<T> {
+    if given.is_empty() {
+        vec![default]
+    } else {
+        given.to_vec()
+    }
+}
+
 /// The runner for one dimension, written once and compiled for each.
 macro_rules! dimension_runner {
     ($module:ident, $dim:ident) => {
         mod $module {
-            use super::{Args, IntegratorArg, Progress, Scene, Switch, TrialArg};
+            use super::{or_default, Args, IntegratorArg, Progress, Scene, Switch, TrialArg};
             use sinew::$dim::math::Real;
             use sinew::$dim::Integrator;
-            use sinew::$dim::{DeformableWorld, ElementModel, RotationFit};
+            use sinew::$dim::{DeformableWorld, ElementModel, Material, RotationFit};
             use sinew_scenes::record::Record;
             use sinew_scenes::$dim::{
                 dt_sweep, BallScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
@@ -570,6 +579,16 @@ macro_rules! dimension_runner {
                     }
                 }
                 Ok(out)
+            }
+
+            /// The scene's material with `--young`, `--poisson` and `--damping` applied.
+            fn material(args: &Args, d: Material) -> Material {
+                Material {
+                    young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
+                    poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
+                    damping_ratio: args.damping.map_or(d.damping_ratio, |v| v as Real),
+                    ..d
+                }
             }
 
             fn cube(args: &Args, subject: Subject) -> FallScene {
@@ -832,13 +851,8 @@ macro_rules! dimension_runner {
                         }
                         Scene::Pile => {
                             let d = PileScene::default();
-                            let counts = if args.bodies.is_empty() {
-                                vec![d.bodies]
-                            } else {
-                                args.bodies.clone()
-                            };
                             let mut out = Vec::new();
-                            for bodies in counts {
+                            for bodies in or_default(&args.bodies, d.bodies) {
                                 let scene = PileScene {
                                     subject,
                                     bodies,
@@ -853,13 +867,8 @@ macro_rules! dimension_runner {
                         }
                         Scene::Tower => {
                             let d = TowerScene::default();
-                            let counts = if args.bodies.is_empty() {
-                                vec![d.bodies]
-                            } else {
-                                args.bodies.clone()
-                            };
                             let mut out = Vec::new();
-                            for bodies in counts {
+                            for bodies in or_default(&args.bodies, d.bodies) {
                                 let scene = TowerScene {
                                     subject,
                                     bodies,
@@ -868,15 +877,7 @@ macro_rules! dimension_runner {
                                     gap: args.gap.map_or(d.gap, |v| v as Real),
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
                                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),
-                                    material: sinew::$dim::Material {
-                                        young_modulus: args
-                                            .young
-                                            .map_or(d.material.young_modulus, |v| v as Real),
-                                        damping_ratio: args
-                                            .damping
-                                            .map_or(d.material.damping_ratio, |v| v as Real),
-                                        ..d.material
-                                    },
+                                    material: material(args, d.material),
                                     ..d
                                 };
                                 out.push(scene.run().map_err(err)?);
@@ -885,24 +886,14 @@ macro_rules! dimension_runner {
                         }
                         Scene::Pinch => {
                             let d = PinchScene::default();
-                            let masses = if args.mass.is_empty() {
-                                vec![d.mass as f64]
-                            } else {
-                                args.mass.clone()
-                            };
                             let mut out = Vec::new();
-                            for mass in masses {
+                            for mass in or_default(&args.mass, d.mass as f64) {
                                 let scene = PinchScene {
                                     subject,
                                     mass: mass as Real,
                                     integrator: cube.integrator,
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
-                                    material: sinew::$dim::Material {
-                                        young_modulus: args
-                                            .young
-                                            .map_or(d.material.young_modulus, |v| v as Real),
-                                        ..d.material
-                                    },
+                                    material: material(args, d.material),
                                     ..d
                                 };
                                 out.push(scene.run().map_err(err)?);

@@ -34,5 +34,6 @@ mod sleep;
 mod snapshot;
 mod soft;
 mod support;
+mod tower;
 mod validation;
 mod vibration;

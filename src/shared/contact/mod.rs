@@ -101,3 +101,32 @@ pub struct ContactPoint {
     /// pressing a surface facet).
     pub node: Option<u32>,
 }
+
+/// The normal relative velocity a contact aims for: `closing` (what just closes the gap, or
+/// leaves the skin), or, when the approach before this substep's forces was faster than
+/// `threshold`, the bounce `−e · approach` if that separates faster (rule 4 of
+/// `docs/ARCHITECTURE.md` §4.3: from the approach before the force update, else resting nodes
+/// chatter).
+pub(crate) fn normal_target(
+    closing: Real,
+    approach: Real,
+    restitution: Real,
+    threshold: Real,
+) -> Real {
+    if -approach > threshold && restitution > 0.0 {
+        closing.max(-restitution * approach)
+    } else {
+        closing
+    }
+}
+
+/// An accumulated friction impulse kept in Coulomb's disc: at most `limit` (`μ` times the
+/// accumulated normal impulse) long.
+pub(crate) fn coulomb(total: Vector, limit: Real) -> Vector {
+    let len = total.length();
+    if len > limit {
+        total * (limit / len)
+    } else {
+        total
+    }
+}

@@ -119,11 +119,8 @@ pub(crate) fn resolve_node(
         *x = cand.prev_pose.transform_point(hit.local);
     }
     let approach = (v_before - vc).dot(n);
-    let mut target = if -approach > restitution_threshold && cand.restitution > 0.0 {
-        (-cand.restitution * approach).max(vn_min)
-    } else {
-        vn_min
-    };
+    let mut target =
+        super::normal_target(vn_min, approach, cand.restitution, restitution_threshold);
     if cand.dynamic && vn < target {
         // Never more than reverse the approach this impulse sees: no energy is created.
         target = target.min(-vn);

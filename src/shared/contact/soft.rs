@@ -639,14 +639,12 @@ pub(crate) fn row(
     // Close the gap down to the skin; within the skin, stop approaching and leave it slowly (a
     // tenth of the way per substep: pushing out at once pumped a stacked pair into rocking).
     let gap = d0 - at.skin;
-    let mut target = if gap >= 0.0 {
+    let closing = if gap >= 0.0 {
         -gap / at.h
     } else {
         -0.1 * gap / at.h
     };
-    if -approach > at.restitution_threshold && restitution > 0.0 {
-        target = target.max(-restitution * approach);
-    }
+    let target = super::normal_target(closing, approach, restitution, at.restitution_threshold);
     Some(SoftRow {
         node_member: i,
         facet_member: hit.other,
@@ -687,12 +685,10 @@ impl SoftRow {
         if self.friction > 0.0 {
             let after = rel + impulse * self.k;
             let slip = after - n * after.dot(n);
-            let mut friction = self.friction_impulse - slip / self.k;
-            let limit = self.friction * self.normal_impulse;
-            let len = friction.length();
-            if len > limit {
-                friction *= limit / len;
-            }
+            let friction = super::coulomb(
+                self.friction_impulse - slip / self.k,
+                self.friction * self.normal_impulse,
+            );
             impulse += friction - self.friction_impulse;
             self.friction_impulse = friction;
         }

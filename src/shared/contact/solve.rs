@@ -145,11 +145,7 @@ impl Contact {
                 total -= t * (slip / kt);
             }
         }
-        let limit = cand.friction * self.normal_impulse;
-        let len = total.length();
-        if len > limit {
-            total *= limit / len;
-        }
+        let total = super::coulomb(total, cand.friction * self.normal_impulse);
         let dj = total - self.friction_impulse;
         self.friction_impulse = total;
         self.apply(dj, velocities, cand, at, bodies, true);

@@ -13,7 +13,7 @@ use super::super::lib::BuildError;
 use super::super::lib::DeformableWorld;
 use super::super::lib::Integrator;
 use super::super::lib::Material;
-use super::fall::cuboid;
+use super::fall::{self, cuboid};
 use super::metrics::interpenetration;
 use super::sim::{
     drive_pins, insert_soft, lumped_masses, pins_of, read_state, rest_positions, BodySpec, Pin,
@@ -714,12 +714,7 @@ impl TowerScene {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
-        let mut half = Vector::splat(5.0);
-        half[1] = 0.5;
-        world.physics.insert(
-            RigidBodyBuilder::fixed().translation(-UP * 0.5),
-            ColliderBuilder::new(cuboid(half)).friction(self.friction),
-        );
+        fall::ground(&mut world, self.friction, 0.0);
         let skin = match self.subject {
             Subject::Sinew(_) => 0.0,
             Subject::Rapier(_) => RAPIER_SKIN,

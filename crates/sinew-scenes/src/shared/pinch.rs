@@ -10,7 +10,7 @@ use super::super::lib::BuildError;
 use super::super::lib::DeformableWorld;
 use super::super::lib::Integrator;
 use super::super::lib::Material;
-use super::fall::cuboid;
+use super::fall::{cuboid, ground};
 use super::flock::Flock;
 use super::sim::{BodySpec, RAPIER_SKIN};
 use super::subject::Subject;
@@ -98,12 +98,7 @@ impl PinchScene {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
-        let mut ground = Vector::splat(2.0);
-        ground[1] = 0.5;
-        world.physics.insert(
-            RigidBodyBuilder::fixed().translation(-UP * 0.5),
-            ColliderBuilder::new(cuboid(ground)).friction(self.friction),
-        );
+        ground(&mut world, self.friction, 0.0);
         let volume = (2.0 * BOX_HALF).powi(DIM as i32);
         let (box_body, _) = world.physics.insert(
             RigidBodyBuilder::dynamic().translation(UP * BOX_HALF),
