@@ -351,10 +351,28 @@ fn contact_scenes_measure_interpenetration_energy_and_cost() {
         assert_eq!(l["scene"], "tower");
         assert_eq!(l["bodies"], 3);
         let sinew = l["model"] == "edge-repulsion";
-        assert_eq!(l["asleep"].is_boolean(), sinew, "{l}");
+        assert_eq!(l["asleep"].is_boolean(), sinew, "{l:?}");
         assert!(l["scatter"].as_f64().unwrap() >= 0.0);
         assert!(l["top_height_ratio"].as_f64().unwrap() > 0.5);
         assert!(l["energy_over_start"].is_number() && l["energy_change"].is_number());
+    }
+    let lines = run(&[
+        "pinch",
+        "--dim",
+        "2",
+        "--mass",
+        "0.5",
+        "--model",
+        "edge-repulsion",
+        "rapier-volume",
+    ]);
+    assert_eq!(lines.len(), 2, "pinch: two models");
+    for l in &lines {
+        assert_eq!(l["scene"], "pinch");
+        assert_eq!(l["mass"], 0.5);
+        assert!(l["slip"].as_f64().unwrap() >= 0.0);
+        assert!(l["overspeed"].as_f64().unwrap() >= 0.0);
+        assert!(l["step_spike"].as_f64().unwrap() >= 1.0);
     }
     let lines = run(&[
         "fold",

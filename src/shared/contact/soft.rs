@@ -22,7 +22,10 @@
 //! facet's business); a node that crosses the plane within the substep is tested at the
 //! crossing, so a fast one cannot pass beside the prism it ends in. Every facet a node meets is
 //! solved, in turn, the one it is most in front of (the face it comes through) first: a node
-//! in a crease meets both sides. A node found behind starts the substep on the plane. Its
+//! in a crease meets both sides. Behind facets of another body, a node meets only the nearest
+//! (its way out), and none when it is on or in front of another facet of that body; nor does
+//! it meet a facet that faces the way its own surface faces (flush side faces of stacked
+//! cubes). A node found behind starts the substep on the plane. Its
 //! target is the normal relative velocity that closes the gap down to a skin, leaves the skin
 //! a tenth of the way per substep once within it, or is `−e · approach` for a bounce; friction
 //! is Coulomb's. The pair's `μ` and `e` combine both bodies' coefficients by rapier's rules.
@@ -466,11 +469,9 @@ pub(crate) fn find<'b>(
 }
 
 /// Per member among `cands`, the largest signed distance of `p` from the plane of one of its
-/// facets whose prism holds `p`: the nearest way out of that body when negative, and when
-/// zero or positive, `p` is outside it (on or in front of a facet). A node behind a facet
-/// leaves the body through that nearest facet only: a node lying on a cube's bottom face was
-/// inside the prism of the face beside it, 3 cm behind its plane, and stepping it out through
-/// that face threw a tower built with touching faces apart.
+/// facets whose prism holds `p` (facets facing away left out): the nearest way out of that
+/// body when negative; when zero or positive, `p` is outside it, on or in front of a facet
+/// (`docs/ARCHITECTURE.md` §6.6).
 fn nearest_exits<'b>(
     body_of: &impl Fn(usize) -> (&'b Deformable, &'b SoftSurface),
     (i, facing): (usize, Vector),
@@ -501,10 +502,8 @@ fn nearest_exits<'b>(
 
 /// Whether a facet of member `m` with unit normal `n` faces the same way as the surface of
 /// member `i` at a node whose outward normal is `facing`: two surfaces in contact face each
-/// other, so such a facet is not the node's to meet. Where two stacked cubes' side faces are
-/// flush, each one's edge nodes lie on the other's side facets; meeting them pushed those nodes
-/// sideways every substep and the tower never came to rest. (Within one body, a crumpled
-/// surface's node normals say little: self contact does not use this test.)
+/// other, so such a facet is not the node's to meet (`docs/ARCHITECTURE.md` §6.6). Within one
+/// body a crumpled surface's node normals say little: self contact does not use this test.
 fn faces_away(i: usize, facing: Vector, m: u32, n: Vector) -> bool {
     m as usize != i && facing.dot(n) > 0.0
 }
@@ -677,7 +676,6 @@ impl SoftRow {
         let relative = |node_v: &[Vector], facet_v: Option<&[Vector]>| {
             node_v[i] - facet_velocity(facet_v.unwrap_or(node_v))
         };
-        let mut facet_v = facet_v;
         let rel = relative(node_v, facet_v.as_deref());
         let total = (self.normal_impulse + (self.target - rel.dot(n)) / self.k).max(0.0);
         let mut impulse = n * (total - self.normal_impulse);
@@ -696,7 +694,7 @@ impl SoftRow {
             return impulse;
         }
         node_v[i] += impulse * self.w_node;
-        let facet_side = match facet_v.as_deref_mut() {
+        let facet_side = match facet_v {
             Some(v) => v,
             None => node_v,
         };

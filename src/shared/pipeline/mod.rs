@@ -25,9 +25,10 @@
 //!    past `max_stretch`, is rolled back to the start of the step with the rigid bodies it
 //!    pushed, and the body frozen; the surface's hierarchy is refitted to the final positions.
 //! 5. **report** ([`finish`]): penetration, inverted cells, energies, stage timings.
-//! 6. **sleep** ([`sleep`]): still long enough with nothing moving near it (a dynamic body
-//!    resting on it, slower than rapier lets a body sleep at, does not count), the body sleeps,
-//!    and the dynamic bodies it touches or is bound to sleep with it; a woken body wakes them.
+//! 6. **sleep** ([`sleep`]): a group is one island: once every live member has been still long
+//!    enough with nothing moving near it (a dynamic body resting on it, slower than rapier lets
+//!    a body sleep at, does not count), all of them sleep, and the dynamic bodies they touch or
+//!    are bound to sleep with them; a woken body wakes them, and the deformables it touched.
 //! 7. **events** ([`finish`]): the colliders touched this step against those of the last.
 //!
 //! After every body: the dynamic bodies they pushed get rapier's integration compensated

@@ -695,7 +695,6 @@ impl Default for TowerScene {
                 young_modulus: 2e6,
                 poisson_ratio: 0.3,
                 damping_ratio: 0.3,
-                ..Default::default()
             },
             friction: 0.5,
             restitution: 0.0,

@@ -62,7 +62,6 @@ impl Default for PinchScene {
                 young_modulus: 2e5,
                 poisson_ratio: 0.3,
                 damping_ratio: 0.3,
-                ..Default::default()
             },
             friction: 1.0,
             squeeze: 0.005,
@@ -146,8 +145,8 @@ impl PinchScene {
         let total: Real = self.timeline.iter().sum();
         let steps = (total / self.dt).round() as usize;
         let lift_from = self.timeline[0] + self.timeline[1];
-        let (mut offset0, mut slip, mut overspeed, mut lowest) =
-            (None, 0.0 as Real, 0.0 as Real, Real::INFINITY);
+        let mut offset0 = None;
+        let (mut slip, mut overspeed, mut lowest): (Real, Real, Real) = (0.0, 0.0, Real::INFINITY);
         let mut walls = Vec::with_capacity(steps);
         for k in 0..steps {
             let t = k as Real * self.dt;
