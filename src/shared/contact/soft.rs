@@ -468,10 +468,10 @@ pub(crate) fn find<'b>(
     out.sort_unstable_by(|a, b| b.d0.total_cmp(&a.d0));
 }
 
-/// Per member among `cands`, the largest signed distance of `p` from the plane of one of its
-/// facets whose prism holds `p` (facets facing away left out): the nearest way out of that
-/// body when negative; when zero or positive, `p` is outside it, on or in front of a facet
-/// (`docs/ARCHITECTURE.md` §6.6).
+/// Per member among `cands` but `i` (the node's own), the largest signed distance of `p` from
+/// the plane of one of its facets whose prism holds `p` (facets facing away left out): the
+/// nearest way out of that body when negative; when zero or positive, `p` is outside it, on or
+/// in front of a facet (`docs/ARCHITECTURE.md` §6.6).
 fn nearest_exits<'b>(
     body_of: &impl Fn(usize) -> (&'b Deformable, &'b SoftSurface),
     (i, facing): (usize, Vector),
@@ -479,7 +479,8 @@ fn nearest_exits<'b>(
     cands: &[(u32, u32)],
 ) -> Vec<(u32, Real)> {
     let mut out: Vec<(u32, Real)> = Vec::new();
-    for &(m, f) in cands {
+    // Self contact is left out: a node lies on its own surface, in front of its own facets.
+    for &(m, f) in cands.iter().filter(|c| c.0 as usize != i) {
         let (other, _) = body_of(m as usize);
         let facet = other.rest.mesh.boundary_facets()[f as usize];
         let q: [Vector; FACET_ARITY] =
@@ -620,7 +621,12 @@ pub(crate) fn row(
     if k <= 0.0 {
         return None;
     }
-    let (friction, restitution) = combined(body, facet_body);
+    // Self contact: the body's own coefficients (a rule combining them with themselves would
+    // square a multiplied friction).
+    let (friction, restitution) = match other {
+        Some(other) => combined(body, other),
+        None => (body.contact.friction, body.contact.restitution),
+    };
     let facet_velocity = |vel: &[Vector]| -> Vector {
         (0..FACET_ARITY)
             .map(|a| vel[hit.facet[a] as usize] * hit.weights[a])

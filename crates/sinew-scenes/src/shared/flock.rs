@@ -735,6 +735,13 @@ impl TowerScene {
 
     /// Runs the tower.
     pub fn run(&self) -> Result<Record, BuildError> {
+        if self.bodies == 0 {
+            return Err(BuildError::InvalidParameter {
+                name: "bodies",
+                value: 0.0,
+                expected: "at least one cube",
+            });
+        }
         let mut flock = self.flock()?;
         let top = self.bodies.saturating_sub(1);
         // The top's height stacked at rest, whatever the gaps it was dropped from.
