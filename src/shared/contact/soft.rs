@@ -392,14 +392,14 @@ impl SoftHit {
 /// The facets of the candidates `cands` that `node` of `body_of(i)` meets in this substep (see
 /// the module docs), into `out`: the one it is most in front of first (the face it comes
 /// through), then the others it would end behind; `body_of(j)` gives member `j`'s body and
-/// surface.
+/// surface; `exits` is a buffer for the node's ways out of the bodies it is near.
 pub(crate) fn find<'b>(
     body_of: impl Fn(usize) -> (&'b Deformable, &'b SoftSurface),
     i: usize,
     node: u32,
     cands: &[(u32, u32)],
     at: &Substep<'_>,
-    out: &mut Vec<SoftHit>,
+    (out, exits): (&mut Vec<SoftHit>, &mut Vec<(u32, Real)>),
 ) {
     out.clear();
     let h = at.h;
@@ -409,7 +409,7 @@ pub(crate) fn find<'b>(
     let p0 = body.state.positions[n_i];
     let p1 = p0 + body.state.velocities[n_i] * h;
     let skin = at.skin;
-    let exits = nearest_exits(&body_of, (i, facing), p0, cands);
+    nearest_exits(&body_of, (i, facing), p0, cands, exits);
     for &(m, f) in cands {
         let (other, surface) = body_of(m as usize);
         let facet = other.rest.mesh.boundary_facets()[f as usize];
@@ -468,17 +468,18 @@ pub(crate) fn find<'b>(
     out.sort_unstable_by(|a, b| b.d0.total_cmp(&a.d0));
 }
 
-/// Per member among `cands` but `i` (the node's own), the largest signed distance of `p` from
-/// the plane of one of its facets whose prism holds `p` (facets facing away left out): the
-/// nearest way out of that body when negative; when zero or positive, `p` is outside it, on or
-/// in front of a facet (`docs/ARCHITECTURE.md` §6.6).
+/// Into `out`, per member among `cands` but `i` (the node's own), the largest signed distance
+/// of `p` from the plane of one of its facets whose prism holds `p` (facets facing away left
+/// out): the nearest way out of that body when negative; when zero or positive, `p` is outside
+/// it, on or in front of a facet (`docs/ARCHITECTURE.md` §6.6).
 fn nearest_exits<'b>(
     body_of: &impl Fn(usize) -> (&'b Deformable, &'b SoftSurface),
     (i, facing): (usize, Vector),
     p: Vector,
     cands: &[(u32, u32)],
-) -> Vec<(u32, Real)> {
-    let mut out: Vec<(u32, Real)> = Vec::new();
+    out: &mut Vec<(u32, Real)>,
+) {
+    out.clear();
     // Self contact is left out: a node lies on its own surface, in front of its own facets.
     for &(m, f) in cands.iter().filter(|c| c.0 as usize != i) {
         let (other, _) = body_of(m as usize);
@@ -498,7 +499,6 @@ fn nearest_exits<'b>(
             None => out.push((m, d)),
         }
     }
-    out
 }
 
 /// Whether a facet of member `m` with unit normal `n` faces the same way as the surface of

@@ -426,7 +426,7 @@ fn facet_contacts(
 /// (one side at least live), and its own with self contact (see
 /// [`soft`](super::super::contact::soft)): each contact found is solved at once.
 fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: bool) {
-    let mut hits = Vec::new();
+    let (mut hits, mut exits) = (Vec::new(), Vec::new());
     for i in 0..members.len() {
         if members[i].body.activation.frozen {
             continue;
@@ -442,7 +442,7 @@ fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: boo
             let node = m.body.rest.mesh.boundary_nodes()[k];
             let cands = &m.sc.soft_cands[b0..b1];
             let body_of = |j: usize| (&*members[j].body, &members[j].sc.soft_surface);
-            soft::find(body_of, i, node, cands, at, &mut hits);
+            soft::find(body_of, i, node, cands, at, (&mut hits, &mut exits));
             // A still member's nodes meet only live members' facets.
             let still = !members[i].live;
             hits.retain(|h| !still || (h.other != i && members[h.other].live));
