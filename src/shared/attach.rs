@@ -248,7 +248,7 @@ pub(crate) fn drive_bones(
                 let w_body = coupling::inv_mass_at(rb, target, dir);
                 let impulse = delta / (nodes.inv_masses[i] + w_body);
                 nodes.velocities[i] += impulse * nodes.inv_masses[i];
-                coupling::apply_impulse(rb, -impulse, target, false, 0.0);
+                coupling::apply_impulse(rb, -impulse, target, 0.0);
             }
             targets.push(None);
         } else {

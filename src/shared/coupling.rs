@@ -4,14 +4,15 @@
 //! * **Reading motion.** [`BodyMotion`]: how a rigid body moves over the step — fixed bodies
 //!   stay put, position-based kinematic bodies go from `position()` to `next_position()`,
 //!   velocity-based ones and dynamic ones are predicted from their velocity, dynamic ones plus
-//!   [`rapier_drift`], what rapier's own step will add to their velocity.
+//!   [`rapier_drift`], what rapier's own step will add to their velocity, taken up evenly over
+//!   the step.
 //! * **Writing impulses.** [`apply_impulse`]: a contact or a two-way binding changes a dynamic
-//!   body's velocity at once, at a point; friction impulses keep the path the body has already
-//!   travelled in the step. [`inv_mass_at`] is the body's side of every impulse's effective
-//!   mass.
-//! * **Compensating rapier's integration.** [`match_rapier_integration`]: rapier moves a body
-//!   by less than its whole velocity change over its substeps; a body the deformables pushed is
-//!   shifted so that rapier's step ends where the contacts predicted.
+//!   body's velocity at once, at a point; a contact's impulse keeps the path the body has
+//!   already travelled in the step (the deformables' substeps integrate it as they do their
+//!   nodes). [`inv_mass_at`] is the body's side of every impulse's effective mass.
+//! * **Compensating rapier's integration.** [`match_rapier_integration`]: rapier's step, which
+//!   adds the drift at once and moves a body by `(N + 1)/(2N)` of it over its `N` substeps, is
+//!   made to end where the deformables' substeps left a body they pushed.
 //! * **Backup and restore.** [`RigidBackup`]: the dynamic bodies a deformable may push, as they
 //!   were before its step, put back when the step is rolled back.
 //!
@@ -120,9 +121,9 @@ impl BodyMotion {
 }
 
 /// Velocity rapier's step adds to a dynamic body: gravity and user forces (torques are left
-/// out), none while it sleeps.
+/// out). A sleeping body counts it too: a contact that pushes it wakes it.
 pub(crate) fn rapier_drift(body: &RigidBody, gravity: Vector, dt: Real) -> Vector {
-    if !body.is_dynamic() || body.is_sleeping() {
+    if !body.is_dynamic() {
         return Vector::ZERO;
     }
     let props = body.mass_properties();
@@ -131,15 +132,15 @@ pub(crate) fn rapier_drift(body: &RigidBody, gravity: Vector, dt: Real) -> Vecto
         * dt
 }
 
-/// Makes rapier's step move a dynamic body that took contact impulses as the contacts
-/// predicted: with its velocity plus the whole [`rapier_drift`] over the step.
+/// Makes rapier's step end a dynamic body that took contact impulses where the deformables'
+/// substeps left it.
 ///
-/// Rapier integrates in `N` substeps, so a body gains `drift` of velocity but moves only
-/// `(N + 1)/(2N) · drift · dt` of it. The contacts that just held a resting body set its
-/// velocity to `−drift`, for it to end the step at rest where it is; rapier would lift it by
-/// the difference and leave it at rest there, to fall back the next step, and so on (a resting
-/// body kept reporting a downward velocity of about `(N − 1)/(2N) · g dt`). The body is moved
-/// back by that difference beforehand.
+/// Over the step the substeps moved it with its velocity `v` (what rapier now holds) plus the
+/// drift taken up evenly: `v·dt + drift·dt/2` from its start pose. Rapier integrates in `N`
+/// substeps, adding the drift at once and moving it `v·dt + (N + 1)/(2N) · drift · dt`. The body
+/// is moved back by the difference, `drift·dt/(2N)`, beforehand; its velocity after rapier's
+/// step, `v + drift`, is the one the substeps ended with. (Without it, a box held at rest by
+/// soft pads rose `g dt²/(2N)` a step and fell back.)
 pub(crate) fn match_rapier_integration(
     body: &mut RigidBody,
     gravity: Vector,
@@ -147,7 +148,7 @@ pub(crate) fn match_rapier_integration(
     solver_iterations: usize,
 ) {
     let n = (solver_iterations + body.additional_solver_iterations()).max(1) as Real;
-    let lag = rapier_drift(body, gravity, dt) * (dt * (n - 1.0) / (2.0 * n));
+    let lag = rapier_drift(body, gravity, dt) * (-dt / (2.0 * n));
     if lag != Vector::ZERO {
         let t = body.translation();
         body.set_translation(t + lag, false);
@@ -163,23 +164,16 @@ pub(crate) fn inv_mass_at(body: &RigidBody, point: Vector, dir: Vector) -> Real 
         + math::ang_dot(rn, props.effective_world_inv_inertia * rn)
 }
 
-/// Gives `body` `impulse` at `point`: its velocity changes at once (see
-/// [`Candidate::apply_impulse`](super::contact::Candidate::apply_impulse) for the path). With
-/// `keep_path`, the body's pose is moved back by the velocity change over `elapsed` (the time
-/// of the step already gone), so that where it is now stays put.
-pub(crate) fn apply_impulse(
-    body: &mut RigidBody,
-    impulse: Vector,
-    point: Vector,
-    keep_path: bool,
-    elapsed: Real,
-) {
+/// Gives `body` `impulse` at `point`: its velocity changes at once, and its pose is moved back
+/// by the velocity change over `elapsed` (the time of the step already gone), so that where it
+/// is now stays put (see [`Candidate::apply_impulse`](super::contact::Candidate::apply_impulse)).
+pub(crate) fn apply_impulse(body: &mut RigidBody, impulse: Vector, point: Vector, elapsed: Real) {
     let (v0, w0) = (body.linvel(), body.angvel());
     // A strong wake-up, as rapier's contacts keep the bodies of an awake island awake: a body
     // touching an awake deformable does not fall asleep on its own; it sleeps with the
     // deformable (`pipeline/sleep.rs`).
     body.apply_impulse_at_point(impulse, point, true);
-    if keep_path && elapsed > 0.0 {
+    if elapsed > 0.0 {
         let change = RigidBodyVelocity::new(body.linvel() - v0, body.angvel() - w0);
         let pose = change.integrate(-elapsed, body.position(), &body.local_center_of_mass());
         body.set_position(pose, false);
@@ -329,7 +323,7 @@ mod tests {
         match_rapier_integration(&mut world.bodies[h], world.gravity, dt, iterations);
         world.step();
         let moved = world.bodies[h].translation() - start;
-        let predicted = (v + drift) * dt;
+        let predicted = (v + drift * 0.5) * dt;
         assert!(
             close(moved, predicted, 1e-5),
             "rapier moved the body {moved:?}, the contacts predict {predicted:?}"
@@ -373,14 +367,14 @@ mod tests {
     }
 
     #[test]
-    fn a_friction_impulse_keeps_the_path_already_travelled() {
+    fn an_impulse_keeps_the_path_already_travelled() {
         let (mut world, h) = thrown();
         let rb = &mut world.bodies[h];
         let before = *rb.position();
         let point = rb.center_of_mass();
         let mut push = Vector::ZERO;
         push[0] = 0.4;
-        apply_impulse(rb, push, point, true, 0.01);
+        apply_impulse(rb, push, point, 0.01);
         let dv = push * rb.mass_properties().effective_inv_mass;
         // The pose moved back by the velocity change over the elapsed time.
         assert!(close(
@@ -391,7 +385,7 @@ mod tests {
         let (mut world, h) = thrown();
         let rb = &mut world.bodies[h];
         let point = rb.center_of_mass();
-        apply_impulse(rb, push, point, false, 0.01);
+        apply_impulse(rb, push, point, 0.0);
         assert_eq!(rb.translation(), before.translation);
     }
 

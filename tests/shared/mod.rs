@@ -23,6 +23,7 @@ mod levels;
 mod mesh;
 mod metrics;
 mod parallel;
+mod pinch;
 mod pipeline;
 mod poisson;
 mod properties;

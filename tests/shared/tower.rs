@@ -1,6 +1,6 @@
 //! A tower of soft cubes built at rest (faces touching, as a stack placed in an editor is)
 //! stands, creates no energy and falls asleep as one island; the contact scenes of the harness
-//! (tower, pinch) report what they measure.
+//! (tower) report what it measures.
 
 use crate::dim::math::{Real, DIM};
 use crate::dim::{ElementModel, Integrator};

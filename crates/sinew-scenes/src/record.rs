@@ -129,7 +129,7 @@ pub struct Record {
     /// Largest vertical slip of the held box against the fingers over the lift and the hold,
     /// m (pinch).
     pub slip: Option<f64>,
-    /// Largest speed of the box relative to the fingers' mean motion, m/s (pinch).
+    /// Most the box's speed ever exceeded the fingers', m/s (pinch).
     pub overspeed: Option<f64>,
     /// The slowest step's wall time over the median step's (pinch).
     pub step_spike: Option<f64>,

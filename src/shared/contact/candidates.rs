@@ -70,7 +70,7 @@ impl Candidate<'_> {
         match self.motion {
             Some(m) => {
                 let mut pose = motions[m].pose_at(s, dt, bodies) * self.local_pose;
-                pose.translation += self.drift * (s * dt);
+                pose.translation += self.drift * (0.5 * s * s * dt);
                 pose
             }
             None => self.local_pose,
@@ -91,7 +91,7 @@ impl Candidate<'_> {
         self.pose = self.pose_at(s1, dt, motions, bodies);
         self.shift = match self.rigid(motions).and_then(|b| bodies.get(b)) {
             // Rapier moves the centre of mass by `linvel · t` and turns about it.
-            Some(rb) => (rb.linvel() + self.drift) * (s1 * dt),
+            Some(rb) => (rb.linvel() + self.drift * (0.5 * s1)) * (s1 * dt),
             None => Vector::ZERO,
         };
     }
@@ -130,7 +130,9 @@ impl Candidate<'_> {
             Some(_) if self.dynamic => self
                 .rigid(motions)
                 .and_then(|b| bodies.get(b))
-                .map_or(Vector::ZERO, |rb| rb.velocity_at_point(anchor) + self.drift),
+                .map_or(Vector::ZERO, |rb| {
+                    rb.velocity_at_point(anchor) + self.drift * s
+                }),
             Some(m) => {
                 let body_pose = motions[m].pose_at(s, dt, bodies);
                 motions[m].point_velocity(p, &body_pose, dt, bodies)
@@ -165,26 +167,25 @@ impl Candidate<'_> {
 
     /// Gives the dynamic body (if any) `impulse` at `anchor`: its velocity changes at once.
     ///
-    /// Over a step the deformables see a dynamic body where its present pose and velocity put
-    /// it, and rapier's step then moves it with its final velocity over the whole step: a
-    /// velocity change `Δv` at the start of a substep, `t` into the step, moves that whole
-    /// predicted path by `Δv·s`, the part before `t` included. That is rapier's own model (one
-    /// velocity per step, so that a resting body is held from the start of the step) and is
-    /// kept for normal impulses. With `keep_path` (friction impulses) the body's start pose is
-    /// moved back by `Δv·t` (and `Δω·t` about its centre of mass) instead, so that where it is
-    /// at `t` stays put: rewriting the path sideways after each friction impulse fed a sway
-    /// that grew by about 0.03 J/s (a 10 kg box on a soft cube never came to rest).
+    /// Over a step the deformables move a dynamic body as a substepped integrator would: from
+    /// its pose at the step's start with its velocity, plus what rapier's step adds to it
+    /// (`drift`, gravity and user forces) taken up evenly over the step, and each impulse
+    /// changing the velocity from the substep it acts in. So that the path already travelled
+    /// stays put, the body's start pose is moved back by `Δv·t` (and `Δω·t` about its centre
+    /// of mass), `t` into the step; rapier's step then moves it from there with its final
+    /// velocity over the whole step ([`coupling::match_rapier_integration`]), to where the
+    /// substeps left it. (Applying gravity at the start of the step, with impulses rewriting
+    /// the whole path, let a box held by friction from both sides slip `g dt²/2` a step.)
     pub fn apply_impulse(
         &self,
         impulse: Vector,
         anchor: Vector,
         motions: &[BodyMotion],
         bodies: &mut RigidBodySet,
-        keep_path: bool,
         dt: Real,
     ) {
         if let Some(rb) = self.rigid(motions).and_then(|b| bodies.get_mut(b)) {
-            coupling::apply_impulse(rb, impulse, anchor, keep_path, self.start * dt);
+            coupling::apply_impulse(rb, impulse, anchor, self.start * dt);
         }
     }
 }
@@ -193,9 +194,10 @@ impl Candidate<'_> {
 /// point features sampled at `spacing`.
 ///
 /// A dynamic body moves over the step with its velocity plus what rapier's step will add to it
-/// (`gravity` and user forces, `drift`): rapier moves it after the deformables, so a body
-/// resting on a deformable would otherwise start every step sunk by `g dt²` into it (past the
-/// facet test's start tolerance), and be supported only when already inside.
+/// (`gravity` and user forces, `drift`), taken up evenly over the step: rapier moves it after
+/// the deformables, so a body resting on a deformable would otherwise sink by `g dt²` a step
+/// into it before the contacts knew. A sleeping body counts it too: a contact that pushes it
+/// wakes it, and rapier's step then adds gravity.
 pub(crate) fn candidate<'a>(
     scan: &Scan<'_>,
     handle: ColliderHandle,

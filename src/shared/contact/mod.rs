@@ -11,7 +11,8 @@
 //! bodies stay put; kinematic bodies are interpolated from `position()` to `next_position()`
 //! (position-based) or predicted from their velocity (velocity-based); dynamic bodies are
 //! predicted from their current velocity plus what rapier's step will add to it (gravity and
-//! user forces), and the deformable's impulses change that velocity during the step. The point
+//! user forces, taken up evenly over the step), and the deformable's impulses change that
+//! velocity from the substep they act in (the path already travelled stays). The point
 //! velocity of a contact is that of the collider's motion.
 //!
 //! **Node against collider**, each substep, after element forces and before `x += h v`, for
@@ -67,6 +68,7 @@ pub(crate) use candidates::{
 };
 pub(crate) use facet::{resolve_facet, FacetMotion};
 pub(crate) use node::{penetration, resolve_node, surface_skin, FreeNode};
+pub(crate) use solve::Contact;
 
 use super::math::{Real, Vector};
 use super::rapier::dynamics::CoefficientCombineRule;

@@ -2,7 +2,7 @@
 //! the others.
 //!
 //! **Groups.** Bodies whose boxes, swept over the step, overlap (and whose collision groups let
-//! them meet) step together: every substep of the group has the size the most demanding of
+//! them meet) step together, as one island (`pipeline/islands.rs`): every substep of the group has the size the most demanding of
 //! them needs, every body advances its velocities (forces, bones, rigid contacts), then the
 //! nodes of each meet the facets of the others on those velocities, then all positions move.
 //! Both sides of a contact are live, so one impulse acts on both at once: equal and opposite
@@ -57,7 +57,6 @@ use super::super::mesh::{CellKind, Mesh};
 use super::super::rapier::dynamics::CoefficientCombineRule;
 use super::super::rapier::geometry::{Aabb, BoundingVolume};
 use super::super::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
-use super::super::set::{DeformableHandle, DeformableSet};
 
 /// A body's surface as the other members of its group meet it during a step.
 #[derive(Clone, Debug, Default)]
@@ -190,131 +189,6 @@ impl NearFacets {
     pub fn of(&self, k: usize) -> &[u32] {
         &self.facets[self.start[k] as usize..self.start[k + 1] as usize]
     }
-}
-
-/// The pairs of deformables that may touch this step, from their boxes swept over the step (a
-/// BVH over the bodies' boxes, one query each), by their collision groups; both asleep, or
-/// either frozen, a pair is left out. Also wakes a sleeping body that a moving one comes near.
-pub(crate) fn pairs(
-    set: &mut DeformableSet,
-    dt: Real,
-    sleep_speed: Real,
-    out: &mut Vec<(DeformableHandle, DeformableHandle)>,
-) {
-    out.clear();
-    let bodies: Vec<(DeformableHandle, Aabb, bool)> = set
-        .iter()
-        .map(|(h, b)| {
-            let mut region = Aabb::new_invalid();
-            let mut fastest: Real = 0.0;
-            for &i in b.rest.mesh.boundary_nodes() {
-                let (x, v) = (
-                    b.state.positions[i as usize],
-                    b.state.velocities[i as usize],
-                );
-                region.take_point(x);
-                region.take_point(x + v * dt);
-                fastest = fastest.max(v.length());
-            }
-            let size = (region.maxs - region.mins).max_element().max(1e-3);
-            let moving = !b.activation.sleeping && fastest > sleep_speed;
-            (h, region.loosened(0.05 * size + 1e-4), moving)
-        })
-        .collect();
-    if bodies.len() < 2 {
-        return;
-    }
-    let boxes: Vec<Aabb> = bodies.iter().map(|b| b.1).collect();
-    let tree = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
-    let mut wake = Vec::new();
-    for (a, (ha, box_a, moving_a)) in bodies.iter().enumerate() {
-        for b in tree.intersect_aabb(box_a) {
-            let b = b as usize;
-            if b <= a {
-                continue;
-            }
-            let (hb, _, moving_b) = bodies[b];
-            let (da, db) = (&set[*ha], &set[hb]);
-            // A frozen body blew up: its last finite state is no shape to meet.
-            let frozen = da.activation.frozen || db.activation.frozen;
-            if frozen || !da.contact.groups.test(db.contact.groups) {
-                continue;
-            }
-            let (sleep_a, sleep_b) = (da.activation.sleeping, db.activation.sleeping);
-            if sleep_a && sleep_b {
-                continue;
-            }
-            if sleep_a && moving_b {
-                wake.push(*ha);
-            }
-            if sleep_b && *moving_a {
-                wake.push(hb);
-            }
-            out.push((*ha, hb));
-        }
-    }
-    out.sort_unstable_by_key(|(a, b)| (a.into_raw_parts(), b.into_raw_parts()));
-    // An island wakes as one: a woken body wakes the sleeping bodies it touched, and those the
-    // bodies they touched; then the pairs are found again with them awake.
-    let mut woke_more = false;
-    while let Some(h) = wake.pop() {
-        if !set[h].activation.sleeping {
-            continue;
-        }
-        set[h].wake_up();
-        for &o in &set[h].last.touching_bodies {
-            if set.get(o).is_some_and(|b| b.activation.sleeping) {
-                wake.push(o);
-                woke_more = true;
-            }
-        }
-    }
-    if woke_more {
-        pairs(set, dt, sleep_speed, out);
-    }
-}
-
-/// The groups of bodies that step together: the connected sets of `pairs`, as indices into
-/// `handles` (each ascending), in the order of their first body; a body in no pair is a group
-/// of one.
-pub(crate) fn groups(
-    handles: &[DeformableHandle],
-    pairs: &[(DeformableHandle, DeformableHandle)],
-) -> Vec<Vec<usize>> {
-    // The set iterates in arena order: the handles are sorted by index.
-    let index = |h: DeformableHandle| {
-        handles
-            .binary_search_by_key(&h.into_raw_parts().0, |x| x.into_raw_parts().0)
-            .ok()
-            .filter(|&k| handles[k] == h)
-    };
-    let mut parent: Vec<usize> = (0..handles.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for &(a, b) in pairs {
-        if let (Some(a), Some(b)) = (index(a), index(b)) {
-            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-            parent[ra.max(rb)] = ra.min(rb);
-        }
-    }
-    let mut out: Vec<Vec<usize>> = Vec::new();
-    let mut group_of: Vec<Option<usize>> = vec![None; handles.len()];
-    for i in 0..handles.len() {
-        let r = root(&mut parent, i);
-        match group_of[r] {
-            Some(g) => out[g].push(i),
-            None => {
-                group_of[r] = Some(out.len());
-                out.push(vec![i]);
-            }
-        }
-    }
-    out
 }
 
 /// Per surface node of `body` (CSR): the facets of the other members' surfaces its box swept
@@ -743,21 +617,4 @@ fn step_out(x: &mut Vector, hit: &SoftHit) -> Real {
     let shift = (-d).min(hit.depth_limit);
     *x += hit.normal * shift;
     d + shift
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn groups_are_the_connected_sets_of_pairs() {
-        let h: Vec<DeformableHandle> = (0..5)
-            .map(|i| DeformableHandle::from_raw_parts(i, 0))
-            .collect();
-        // 0–3 and 3–4 touch, 1 and 2 are alone; a pair naming a stale handle is ignored.
-        let stale = DeformableHandle::from_raw_parts(2, 7);
-        let pairs = [(h[3], h[4]), (h[0], h[3]), (h[1], stale)];
-        assert_eq!(groups(&h, &pairs), vec![vec![0, 3, 4], vec![1], vec![2]]);
-        assert_eq!(groups(&h, &[]).len(), 5);
-    }
 }

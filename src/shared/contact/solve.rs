@@ -61,6 +61,20 @@ impl Contact {
         }
     }
 
+    /// Solves the contact once more, from the impulses it has given so far (a later pass of
+    /// the island's contacts with a dynamic body), and brings that body's candidates to its new
+    /// predicted pose.
+    pub fn solve_again(
+        &mut self,
+        velocities: &mut [Vector],
+        at: &Substep<'_>,
+        candidates: &mut [Candidate<'_>],
+        bodies: &mut RigidBodySet,
+    ) {
+        self.solve(velocities, at, candidates, bodies);
+        refresh_poses(candidates, self.candidate, at.s1, at.dt, at.motions, bodies);
+    }
+
     /// Adds the dynamic body it pushed (with a non-zero normal impulse), if any, to `pushed`.
     fn note_pushed(
         &self,
@@ -89,8 +103,7 @@ impl Contact {
             .sum()
     }
 
-    /// `impulse` on the deformable's side, its opposite on a dynamic body (see
-    /// [`Candidate::apply_impulse`] for `keep_path`).
+    /// `impulse` on the deformable's side, its opposite on a dynamic body.
     fn apply(
         &self,
         impulse: Vector,
@@ -98,12 +111,11 @@ impl Contact {
         cand: &Candidate<'_>,
         at: &Substep<'_>,
         bodies: &mut RigidBodySet,
-        keep_path: bool,
     ) {
         for a in 0..FACET_ARITY {
             velocities[self.nodes[a] as usize] += impulse * (self.weights[a] * self.inv_masses[a]);
         }
-        cand.apply_impulse(-impulse, self.anchor, at.motions, bodies, keep_path, at.dt);
+        cand.apply_impulse(-impulse, self.anchor, at.motions, bodies, at.dt);
     }
 
     /// One Gauss–Seidel update: the normal impulse towards the target, then friction.
@@ -129,7 +141,7 @@ impl Contact {
             let total = (self.normal_impulse + (self.target - vn) / k).max(0.0);
             let dj = total - self.normal_impulse;
             self.normal_impulse = total;
-            self.apply(n * dj, velocities, cand, at, bodies, false);
+            self.apply(n * dj, velocities, cand, at, bodies);
         }
         if cand.friction <= 0.0 {
             return;
@@ -148,6 +160,6 @@ impl Contact {
         let total = super::coulomb(total, cand.friction * self.normal_impulse);
         let dj = total - self.friction_impulse;
         self.friction_impulse = total;
-        self.apply(dj, velocities, cand, at, bodies, true);
+        self.apply(dj, velocities, cand, at, bodies);
     }
 }

@@ -2,12 +2,14 @@
 //! `dt` (`docs/ARCHITECTURE.md` §4).
 //!
 //! [`DeformablePipeline::step`] is a list of phases, each a function of its own file. The
-//! deformables that may touch each other form groups ([`soft`]) that step together: phases 1–2
-//! for each member, the substeps of phase 3 in lockstep (with contacts between the members),
-//! phases 4–7 for each member; a body alone is a group of one.
+//! deformables that may touch each other, or push the same dynamic rigid body, form islands
+//! ([`islands`]) that step together: phases 1–2 for each member, the substeps of phase 3 in
+//! lockstep (with contacts between the members, and passes over the contacts with a rigid body
+//! two members push), phases 4–7 for each member; a body alone is an island of one.
 //!
 //! 1. **wake** ([`sleep`]): a sleeping body wakes if a bone it is bound to moves, a collider it
-//!    touched was removed, or a moving body comes near; an asleep body skips the rest.
+//!    touched was removed, or a moving body comes near, and with it the members that push the
+//!    same dynamic body; an asleep body skips the rest.
 //! 2. **prepare** ([`prepare`]): the state is saved for a rollback; how every relevant rigid
 //!    body moves over the step ([`BodyMotion`](super::coupling::BodyMotion)); the broad phase:
 //!    one query per deformable, then per surface node and per surface facet, into tables of
@@ -28,7 +30,8 @@
 //! 6. **sleep** ([`sleep`]): a group is one island: once every live member has been still long
 //!    enough with nothing moving near it (a dynamic body resting on it, slower than rapier lets
 //!    a body sleep at, does not count), all of them sleep, and the dynamic bodies they touch or
-//!    are bound to sleep with them; a woken body wakes them, and the deformables it touched.
+//!    are bound to sleep with them at the start of the next step (rapier wakes a body moved in
+//!    the step it is put to sleep); a woken body wakes them, and the deformables it touched.
 //! 7. **events** ([`finish`]): the colliders touched this step against those of the last.
 //!
 //! After every body: the dynamic bodies they pushed get rapier's integration compensated
@@ -36,6 +39,7 @@
 
 mod containment;
 mod finish;
+mod islands;
 mod prepare;
 mod sleep;
 mod substep;
@@ -148,6 +152,12 @@ struct Work {
     pushed: Vec<RigidBodyHandle>,
     /// Pairs of deformables that may touch this step.
     pairs: Vec<(DeformableHandle, DeformableHandle)>,
+    /// Pairs that push, or are bound to, the same dynamic body this step.
+    shared: Vec<(DeformableHandle, DeformableHandle)>,
+    /// Pairs that step together this step: `pairs` and `shared`.
+    links: Vec<(DeformableHandle, DeformableHandle)>,
+    /// Dynamic bodies held by deformables that fell asleep last step, to sleep now.
+    to_sleep: Vec<RigidBodyHandle>,
     /// Pairs of deformables touching before and after this step (smaller handle first).
     touching_before: Vec<(DeformableHandle, DeformableHandle)>,
     touching_now: Vec<(DeformableHandle, DeformableHandle)>,
@@ -181,6 +191,8 @@ struct Scratch {
     backup: RigidBackup,
     /// The dynamic bodies a deformable holds (touches or is bound to).
     held: Vec<RigidBodyHandle>,
+    /// The dynamic bodies it held as it fell asleep this step.
+    to_sleep: Vec<RigidBodyHandle>,
     /// How far off two-sided surfaces this body's nodes are kept.
     skin: Real,
     /// Whether the body was carried along with bones that jumped this step.
@@ -299,6 +311,7 @@ impl DeformablePipeline {
             broad_phase,
         };
         self.work.pushed.clear();
+        sleep::sleep_held(&mut self.work.to_sleep, bodies);
         self.step_bodies(deformables, &ctx, bodies, events);
         for h in &self.work.pushed {
             if let Some(rb) = bodies.get_mut(*h) {
@@ -310,7 +323,7 @@ impl DeformablePipeline {
     }
 
     /// Every body's step: the bodies that may touch each other step together, as a group
-    /// ([`soft`]), each group after the other.
+    /// ([`islands`]), each after the other.
     fn step_bodies(
         &mut self,
         deformables: &mut DeformableSet,
@@ -320,15 +333,19 @@ impl DeformablePipeline {
     ) {
         let work = &mut self.work;
         let pairs_start = Instant::now();
-        soft::pairs(
+        islands::pairs(
             deformables,
             ctx.dt,
             ctx.settings.sleep_speed,
             &mut work.pairs,
         );
         touching_pairs(deformables, &mut work.touching_before);
+        islands::rigid_links(deformables, ctx, bodies, &mut work.shared);
         let handles: Vec<DeformableHandle> = deformables.iter().map(|(h, _)| h).collect();
-        let groups = soft::groups(&handles, &work.pairs);
+        work.links.clear();
+        work.links.extend_from_slice(&work.shared);
+        work.links.extend_from_slice(&work.pairs);
+        let groups = islands::groups(&handles, &work.links);
         self.report.pairs_time = pairs_start.elapsed().as_secs_f64();
         // Every body, once, to be handed to its group.
         let mut slots: Vec<Option<&mut Deformable>> =
@@ -352,15 +369,22 @@ impl DeformablePipeline {
                     live: false,
                     asleep: false,
                     touched: Vec::new(),
+                    rigid_rows: Vec::new(),
                 })
                 .collect();
-            step_group(&mut members, ctx, bodies, events, &mut self.report);
-            for m in &members {
+            let touch = |(a, b): &(DeformableHandle, DeformableHandle)| {
+                members.iter().any(|m| m.handle == *a) && members.iter().any(|m| m.handle == *b)
+            };
+            let soft = work.pairs.iter().any(touch);
+            let shared = (soft, &work.shared[..]);
+            step_group(&mut members, shared, ctx, bodies, events, &mut self.report);
+            for m in members.iter_mut() {
                 for h in &m.sc.pushed {
                     if !work.pushed.contains(h) {
                         work.pushed.push(*h);
                     }
                 }
+                work.to_sleep.append(&mut m.sc.to_sleep);
             }
         }
         drop(slots);
@@ -384,9 +408,12 @@ fn pair_events(
     }
 }
 
-/// A group's step: the phases of the module docs, for every member, the substeps together.
+/// A group's step: the phases of the module docs, for every member, the substeps together
+/// (`may_touch`: some of its members may touch each other; `shared`: the pairs that push or are
+/// bound to the same dynamic body).
 fn step_group<'a>(
     members: &mut [Member<'_, 'a>],
+    (may_touch, shared): (bool, &[(DeformableHandle, DeformableHandle)]),
     ctx: &StepContext<'a>,
     bodies: &mut RigidBodySet,
     events: &dyn DeformableEventHandler,
@@ -398,7 +425,12 @@ fn step_group<'a>(
         sc.pushed.clear();
         detached.push(body.prune_attachments(bodies));
         // 1. wake
-        let asleep = sleep::stays_asleep(body, ctx, bodies, sc);
+        sleep::stays_asleep(body, ctx, bodies, sc);
+    }
+    sleep::wake_linked(members, shared);
+    for m in members.iter_mut() {
+        let (body, sc) = (&mut *m.body, &mut *m.sc);
+        let asleep = body.activation.sleeping;
         sleep::wake_held_bodies(body, ctx, bodies, sc);
         m.asleep = asleep;
         m.live = !asleep && !body.activation.frozen && ctx.dt > 0.0;
@@ -414,7 +446,7 @@ fn step_group<'a>(
     }
     // Contacts between deformables: the members' against each other's surfaces, and a body
     // with self contact against its own.
-    let soft = members.len() > 1
+    let soft = may_touch
         || members
             .iter()
             .any(|m| m.live && m.body.contact.self_contact);
@@ -453,7 +485,7 @@ fn step_group<'a>(
         .all(|(m, ready)| !m.live || *ready == Some(true));
     for ((m, detached), ready) in members.iter_mut().zip(detached).zip(ready) {
         let sleeps = island_sleeps && ready == Some(true);
-        finish_member(m, ctx, bodies, events, (detached, sleeps), report);
+        finish_member(m, ctx, events, (detached, sleeps), report);
     }
 }
 
@@ -539,7 +571,6 @@ fn soft_tables(members: &mut [Member<'_, '_>], i: usize, ctx: &StepContext<'_>) 
 fn finish_member(
     m: &mut Member<'_, '_>,
     ctx: &StepContext<'_>,
-    bodies: &mut RigidBodySet,
     events: &dyn DeformableEventHandler,
     (detached, sleeps): (usize, bool),
     report: &mut StepReport,
@@ -555,7 +586,7 @@ fn finish_member(
         let integrate_start = Instant::now();
         // 6. sleep
         if sleeps {
-            sleep::fall_asleep(body, ctx, bodies, sc);
+            sleep::fall_asleep(body, ctx, &mut sc.to_sleep);
         }
         finish::energies(body, ctx);
         times.integrate += integrate_start.elapsed().as_secs_f64();

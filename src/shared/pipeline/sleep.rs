@@ -7,9 +7,11 @@
 use super::super::body::Deformable;
 use super::super::contact;
 use super::super::coupling::{is_moving, is_restless};
-use super::super::math::{Real, Vector};
+use super::super::math::{self, Real, Vector};
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::rapier::geometry::{Aabb, BoundingVolume};
+use super::super::set::DeformableHandle;
+use super::substep::Member;
 use super::{Scratch, StepContext};
 
 /// Wakes a sleeping body that something disturbs (or that may no longer sleep); returns
@@ -35,6 +37,35 @@ fn held_bodies(body: &Deformable, ctx: &StepContext<'_>, out: &mut Vec<RigidBody
         if let Some(p) = ctx.colliders.get(*c).and_then(|c| c.parent()) {
             if !out.contains(&p) {
                 out.push(p);
+            }
+        }
+    }
+}
+
+/// Wakes the sleeping members that share a dynamic body with an awake one (`shared`),
+/// transitively: a pad left asleep would give no reaction to the box the other pushes.
+pub(super) fn wake_linked(
+    members: &mut [Member<'_, '_>],
+    shared: &[(DeformableHandle, DeformableHandle)],
+) {
+    let index = |h: DeformableHandle| members.iter().position(|m| m.handle == h);
+    let links: Vec<(usize, usize)> = shared
+        .iter()
+        .filter_map(|&(a, b)| Some((index(a)?, index(b)?)))
+        .collect();
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for &(a, b) in &links {
+            let (sa, sb) = (
+                members[a].body.activation.sleeping,
+                members[b].body.activation.sleeping,
+            );
+            let frozen = members[a].body.activation.frozen || members[b].body.activation.frozen;
+            if sa != sb && !frozen {
+                let k = if sa { a } else { b };
+                members[k].body.wake_up();
+                changed = true;
             }
         }
     }
@@ -149,19 +180,32 @@ pub(super) fn update(
     body.activation.still_time >= ctx.settings.time_until_sleep
 }
 
-/// Puts a body to sleep, at rest, with the dynamic bodies it touched or is bound to.
+/// Puts a body to sleep, at rest; the dynamic bodies it touched or is bound to go into `held`,
+/// to sleep at the start of the next step ([`sleep_held`]).
 pub(super) fn fall_asleep(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
-    bodies: &mut RigidBodySet,
-    sc: &mut Scratch,
+    held: &mut Vec<RigidBodyHandle>,
 ) {
     body.activation.sleeping = true;
     body.state.velocities.fill(Vector::ZERO);
-    held_bodies(body, ctx, &mut sc.held);
-    for h in &sc.held {
-        if let Some(rb) = bodies.get_mut(*h).filter(|b| b.is_dynamic()) {
-            rb.sleep();
+    held_bodies(body, ctx, held);
+}
+
+/// Puts to sleep the dynamic bodies that the deformables which fell asleep last step held, if
+/// they are still slow. Not in that step: the contacts moved them (the path they keep), and
+/// rapier wakes a body moved in the step it was put to sleep (a box held by two sleeping pads
+/// was woken, fell a step's gravity into them and was thrown out). Held up by the step's
+/// contacts, it ends rapier's step at rest.
+pub(super) fn sleep_held(held: &mut Vec<RigidBodyHandle>, bodies: &mut RigidBodySet) {
+    for h in held.drain(..) {
+        if let Some(rb) = bodies.get_mut(h).filter(|b| b.is_dynamic()) {
+            let a = rb.activation();
+            let slow = rb.linvel().length() <= a.normalized_linear_threshold
+                && math::ang_norm(rb.angvel()) <= a.angular_threshold;
+            if slow {
+                rb.sleep();
+            }
         }
     }
 }

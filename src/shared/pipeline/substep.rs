@@ -4,16 +4,18 @@
 use super::super::attach::{self, DrivenNodes};
 use super::super::body::Deformable;
 use super::super::contact::soft;
-use super::super::contact::{self, FacetMotion, FreeNode};
+use super::super::contact::{self, Contact, FacetMotion, FreeNode};
 use super::super::coupling::{BodyMotion, Substep};
 use super::super::integrator::{AfterContacts, Bound, Integrate};
 use super::super::math::{Real, Vector, FACET_ARITY};
-use super::super::rapier::dynamics::RigidBodySet;
+use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::set::DeformableHandle;
 use super::{timed, Candidates, Scratch, StageTimes, StepContext};
 
 /// Most feature crossings resolved per surface facet and substep.
 const FACET_PASSES: usize = 8;
+/// Passes over a substep's contacts with dynamic rigid bodies after the first.
+const RIGID_PASSES: usize = 10;
 
 /// What the substep loop did.
 #[derive(Copy, Clone, Debug, Default)]
@@ -79,6 +81,8 @@ pub(super) struct Member<'m, 'a> {
     pub asleep: bool,
     /// The members its nodes touched this step.
     pub touched: Vec<usize>,
+    /// This substep's contacts with dynamic rigid bodies, solved again with the island's.
+    pub rigid_rows: Vec<Contact>,
 }
 
 /// Runs the substeps of a group's step, the velocities advanced by `integrator`; with `soft`,
@@ -100,11 +104,21 @@ pub(super) fn run(
     let mut t = 0.0;
     let mut substeps = 0;
     while let Some(h) = next_substep(integrator, members, &live, ctx, dt - t, substeps) {
-        for &i in &live {
+        for j in 0..live.len() {
+            let i = live[order(substeps % 2 == 1, live.len(), j)];
             let m = &mut members[i];
             let at = substep_at(ctx, m.sc.skin, h, t, &motions[i]);
             advance(integrator, m, ctx, &at, bodies);
         }
+        rigid_passes(
+            members,
+            &live,
+            ctx,
+            (h, t),
+            &motions,
+            substeps % 2 == 1,
+            bodies,
+        );
         if soft {
             let at = substep_at(ctx, 0.0, h, t, &[]);
             soft_contacts(members, &at, substeps % 2 == 1);
@@ -125,6 +139,60 @@ pub(super) fn run(
     }
     for (m, motions) in members.iter_mut().zip(motions) {
         m.sc.motions = motions;
+    }
+}
+
+/// Passes over the substep's contacts with the dynamic rigid bodies that two or more members
+/// push, after the first (which found and solved them): a light box squeezed between two pads
+/// takes one pad's push, then the other's, and in one pass the second pad's nodes take the
+/// box's rebound and fly off it; the passes bring the pads' impulses on it to balance. A body
+/// only one member pushes keeps the single pass (that member's sweep already meets it node
+/// after node).
+fn rigid_passes(
+    members: &mut [Member<'_, '_>],
+    live: &[usize],
+    ctx: &StepContext<'_>,
+    (h, t): (Real, Real),
+    motions: &[Vec<BodyMotion>],
+    backward: bool,
+    bodies: &mut RigidBodySet,
+) {
+    let mut pushed: Vec<(RigidBodyHandle, usize)> = Vec::new();
+    for &i in live {
+        let m = &members[i];
+        for c in &m.rigid_rows {
+            if let Some(b) = m.candidates[c.candidate].rigid(&motions[i]) {
+                pushed.push((b, i));
+            }
+        }
+    }
+    pushed.sort_unstable_by_key(|(b, i)| (b.into_raw_parts(), *i));
+    pushed.dedup();
+    let mut shared: Vec<RigidBodyHandle> = pushed
+        .windows(2)
+        .filter(|w| w[0].0 == w[1].0)
+        .map(|w| w[0].0)
+        .collect();
+    shared.dedup();
+    if shared.is_empty() {
+        return;
+    }
+    for pass in 0..RIGID_PASSES {
+        let backward = backward != (pass % 2 == 0);
+        for j in 0..live.len() {
+            let i = live[order(backward, live.len(), j)];
+            let m = &mut members[i];
+            let at = substep_at(ctx, m.sc.skin, h, t, &motions[i]);
+            let rows = &mut m.rigid_rows;
+            let n = rows.len();
+            for k in 0..n {
+                let c = &mut rows[order(backward, n, k)];
+                let body = m.candidates[c.candidate].rigid(&motions[i]);
+                if body.is_some_and(|b| shared.contains(&b)) {
+                    c.solve_again(&mut m.body.state.velocities, &at, &mut m.candidates, bodies);
+                }
+            }
+        }
     }
 }
 
@@ -224,6 +292,8 @@ fn advance(
 
     // Contacts, on velocities, before positions move.
     let candidates = &mut m.candidates;
+    let rows = &mut m.rigid_rows;
+    rows.clear();
     if !candidates.is_empty() {
         let stats = &mut m.stats;
         let before = answers.then(|| body.state.velocities.clone());
@@ -234,8 +304,9 @@ fn advance(
             // Sequential impulses in one fixed order are lopsided (a box landing flat on a
             // soft cube was kicked sideways and kept swaying): the sweeps alternate.
             let backward = stats.substeps % 2 == 1;
-            node_contacts(body, at, backward, bodies, sc, candidates);
-            stats.facet_contacts += facet_contacts(body, at, backward, bodies, sc, candidates);
+            node_contacts(body, at, backward, bodies, sc, (candidates, rows));
+            stats.facet_contacts +=
+                facet_contacts(body, at, backward, bodies, sc, (candidates, rows));
         });
         // An implicit integrator lets the rest of the body answer the contacts within the
         // step, then the contacts see the result.
@@ -261,9 +332,10 @@ fn advance(
                 given.pass_on(body, at, sc, candidates, bodies);
                 timed(&mut m.times.contacts, || {
                     let backward = stats.substeps % 2 == 1;
-                    node_contacts(body, at, backward, bodies, sc, candidates);
+                    rows.clear();
+                    node_contacts(body, at, backward, bodies, sc, (candidates, rows));
                     stats.facet_contacts +=
-                        facet_contacts(body, at, backward, bodies, sc, candidates);
+                        facet_contacts(body, at, backward, bodies, sc, (candidates, rows));
                 });
             }
         }
@@ -310,7 +382,7 @@ impl Given<'_> {
             let rest = c.normal.dot(self.reactions[i] * at.h - given);
             if rest > 0.0 {
                 let anchor = cand.anchor(c.point);
-                cand.apply_impulse(-c.normal * rest, anchor, at.motions, bodies, false, at.dt);
+                cand.apply_impulse(-c.normal * rest, anchor, at.motions, bodies, at.dt);
             }
         }
     }
@@ -332,7 +404,7 @@ fn node_contacts(
     backward: bool,
     bodies: &mut RigidBodySet,
     sc: &mut Scratch,
-    candidates: &mut Candidates<'_>,
+    (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
 ) {
     let surface = body.rest.mesh.boundary_nodes();
     for j in 0..surface.len() {
@@ -361,6 +433,9 @@ fn node_contacts(
         sc.touched_nodes[k] = true;
         sc.last_contact[k] = Some(point);
         sc.touched_colliders[c.candidate] = true;
+        if candidates[c.candidate].dynamic {
+            rows.push(c);
+        }
     }
 }
 
@@ -372,7 +447,7 @@ fn facet_contacts(
     backward: bool,
     bodies: &mut RigidBodySet,
     sc: &mut Scratch,
-    candidates: &mut Candidates<'_>,
+    (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
 ) -> usize {
     let facets = body.rest.mesh.boundary_facets();
     let h = at.h;
@@ -416,6 +491,9 @@ fn facet_contacts(
             let point = c.settle(v, at, candidates, bodies, &mut sc.pushed, None);
             body.last.contacts.push(point);
             sc.touched_colliders[c.candidate] = true;
+            if candidates[c.candidate].dynamic {
+                rows.push(c);
+            }
             solved += 1;
         }
     }

@@ -25,8 +25,9 @@ const OPENING: Real = 0.01;
 
 /// Two kinematic fingers carrying soft pads (their outer faces bound to the fingers) close on a
 /// dynamic box of `mass` on the ground, squeezing each pad by `squeeze`, lift it `lift` and hold
-/// it. Records the box's slip against the fingers over the lift and the hold, its largest speed
-/// relative to the fingers, its deepest below the ground, and how uneven the steps' costs are.
+/// it. Records the box's slip against the fingers over the lift and the hold, how much faster
+/// than the fingers it ever moved, its deepest below the ground, and how uneven the steps' costs
+/// are.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct PinchScene {
     /// What the pads are.
@@ -74,10 +75,14 @@ impl Default for PinchScene {
 }
 
 /// Where the fingers are at time `t` of a [`PinchScene`]: how far each has closed, and how
-/// high it has lifted.
+/// high it has lifted. Each motion starts and stops smoothly (a smoothstep in time), as a
+/// gripper's does: a finger that jumps to speed leaves any held box a step behind.
 fn finger_motion(scene: &PinchScene, t: Real) -> (Real, Real) {
     let [settle, close, lift, _] = scene.timeline;
-    let ramp = |t: Real, start: Real, length: Real| ((t - start) / length).clamp(0.0, 1.0);
+    let ramp = |t: Real, start: Real, length: Real| {
+        let u = ((t - start) / length).clamp(0.0, 1.0);
+        u * u * (3.0 - 2.0 * u)
+    };
     let closed = ramp(t, settle, close) * (OPENING + scene.squeeze);
     let lifted = ramp(t, settle + close, lift) * scene.lift;
     (closed, lifted)
@@ -164,7 +169,8 @@ impl PinchScene {
             let body = &flock.world.physics.bodies[box_body];
             let height = body.translation().dot(UP);
             lowest = lowest.min(height - BOX_HALF);
-            overspeed = overspeed.max((body.linvel() - finger_velocity).length());
+            // Faster than the fingers: a box lagging them as they start to lift does not count.
+            overspeed = overspeed.max(body.linvel().length() - finger_velocity.length());
             if t + self.dt >= lift_from {
                 let offset = height - finger_height;
                 let o0 = *offset0.get_or_insert(offset);
