@@ -375,6 +375,25 @@ fn contact_scenes_measure_interpenetration_energy_and_cost() {
         assert!(l["step_spike"].as_f64().unwrap() >= 1.0);
     }
     let lines = run(&[
+        "roll",
+        "--dim",
+        "2",
+        "--seconds",
+        "0.3",
+        "--model",
+        "edge-repulsion",
+        "rapier-volume",
+    ]);
+    assert_eq!(lines.len(), 2, "roll: two models");
+    for l in &lines {
+        assert_eq!(l["scene"], "roll");
+        assert!((l["mass"].as_f64().unwrap() - 0.2).abs() < 1e-6);
+        assert!(l["scatter"].as_f64().unwrap() >= 0.0);
+        let sinew = l["model"] == "edge-repulsion";
+        assert_eq!(l["max_penetration"].is_number(), sinew, "{l:?}");
+        assert!(l["energy_over_start"].is_number() && l["energy_gain"].is_number());
+    }
+    let lines = run(&[
         "fold",
         "--dim",
         "2",

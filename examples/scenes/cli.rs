@@ -44,6 +44,9 @@ pub enum Scene {
     /// Soft pads on two kinematic fingers pinch a dynamic box and lift it 0.2 m (`--mass`,
     /// default 0.2 kg; one run per mass).
     Pinch,
+    /// A soft ball rolled down a trimesh ramp into a wall of dynamic boxes (`--mass`: each
+    /// box, default 0.2 kg).
+    Roll,
     /// A sausage folded double on a table, self contact on (`--self-contact off` to compare);
     /// `--seconds` is the fold and the hold together.
     Fold,
@@ -357,6 +360,7 @@ fn table_header(scene: Scene) -> String {
             " bodies  inside mm  at rest mm  E gain   speed  rest m  pairs ms/s"
         }
         Scene::Pinch => "  mass kg  slip mm  overspeed  floor mm  box m  spike",
+        Scene::Roll => "  box kg  pen mm  E>start  E gain  knocked m",
         Scene::Tower => {
             " bodies  inside mm  at rest mm  E>start  E end  top/built  scatter mm  asleep"
         }
@@ -412,6 +416,14 @@ fn table_row(scene: Scene, r: &Record) -> String {
             opt(r.max_penetration.map(|p| p * 1e3), 2),
             opt(r.rest_com, 3),
             opt(r.step_spike, 1)
+        ),
+        Scene::Roll => format!(
+            "  {:>6}  {:>6}  {:>7}  {:>6}  {:>9}",
+            opt(r.mass, 2),
+            opt(r.max_penetration.map(|p| p * 1e3), 2),
+            opt(r.energy_over_start.map(|e| e * 100.0), 2) + "%",
+            opt(r.energy_gain.map(|e| e * 100.0), 2) + "%",
+            opt(r.scatter, 3)
         ),
         Scene::Tower => format!(
             " {:>6}  {:>9}  {:>10}  {:>7}  {:>6}  {:>9}  {:>10}  {:>6}",
@@ -528,7 +540,7 @@ macro_rules! dimension_runner {
             use sinew_scenes::$dim::{
                 dt_sweep, BallScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
                 ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
-                PinchScene, StackScene, StretchScene, Subject, TowerScene, VibrationScene,
+                PinchScene, RollScene, StackScene, StretchScene, Subject, TowerScene, VibrationScene,
                 CRUSH_MASSES,
             };
 
@@ -893,6 +905,23 @@ macro_rules! dimension_runner {
                                     mass: mass as Real,
                                     integrator: cube.integrator,
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
+                                    material: material(args, d.material),
+                                    ..d
+                                };
+                                out.push(scene.run().map_err(err)?);
+                            }
+                            out
+                        }
+                        Scene::Roll => {
+                            let d = RollScene::default();
+                            let mut out = Vec::new();
+                            for mass in or_default(&args.mass, d.box_mass as f64) {
+                                let scene = RollScene {
+                                    subject,
+                                    box_mass: mass as Real,
+                                    integrator: cube.integrator,
+                                    dt: args.dt.map_or(d.dt, |v| v as Real),
+                                    seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                     material: material(args, d.material),
                                     ..d
                                 };

@@ -23,4 +23,11 @@ pub(crate) mod level {
         ];
         ColliderBuilder::polyline(vertices, None)
     }
+
+    /// A ramp as a polyline: from `(−length·cos a, length·sin a)` down to the origin at slope
+    /// `angle` (radians), then on along the floor to `run`.
+    pub fn ramp(length: Real, angle: Real, run: Real) -> ColliderBuilder {
+        let top = Vector::new(-length * angle.cos(), length * angle.sin());
+        ColliderBuilder::polyline(vec![top, Vector::ZERO, Vector::new(run, 0.0)], None)
+    }
 }

@@ -31,4 +31,25 @@ pub(crate) mod level {
         }
         ColliderBuilder::trimesh(vertices, indices).expect("a valid bowl")
     }
+
+    /// A ramp as a trimesh as wide (across z) as `run`, at least 1 m: from height
+    /// `length·sin a` at `x = −length·cos a` down to the origin at slope `angle` (radians), then
+    /// on along the floor to `x = run`; normals up.
+    pub fn ramp(length: Real, angle: Real, run: Real) -> ColliderBuilder {
+        let (x0, y0, w) = (
+            -length * angle.cos(),
+            length * angle.sin(),
+            0.5 * run.max(1.0),
+        );
+        let vertices = vec![
+            Vector::new(x0, y0, -w),
+            Vector::new(x0, y0, w),
+            Vector::new(0.0, 0.0, -w),
+            Vector::new(0.0, 0.0, w),
+            Vector::new(run, 0.0, -w),
+            Vector::new(run, 0.0, w),
+        ];
+        let indices = vec![[0, 1, 3], [0, 3, 2], [2, 3, 5], [2, 5, 4]];
+        ColliderBuilder::trimesh(vertices, indices).expect("a valid ramp")
+    }
 }

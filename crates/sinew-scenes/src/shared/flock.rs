@@ -178,6 +178,21 @@ impl Flock {
                 .sum::<Real>()
     }
 
+    /// The deepest a node of sinew's bodies is inside a collider after the last step (the
+    /// steps' reports), m; `None` for rapier's soft bodies, which do not say.
+    pub fn deepest_node_penetration(&self) -> Option<Real> {
+        let report = self.world.report();
+        let sinew: Vec<Real> = self
+            .members
+            .iter()
+            .filter_map(|m| match m.soft {
+                Soft::Sinew(h) => Some(report.get(h).map_or(0.0, |r| r.max_penetration)),
+                Soft::Rapier(_) => None,
+            })
+            .collect();
+        (!sinew.is_empty()).then(|| sinew.into_iter().fold(0.0, Real::max))
+    }
+
     /// Whether a body blew up (or turned non-finite).
     pub fn exploded(&self) -> bool {
         self.exploded || self.nan
@@ -287,7 +302,7 @@ impl Flock {
 
 /// What the multi-body scenes measure over a run, followed step by step.
 #[derive(Default)]
-struct Watch {
+pub(super) struct Watch {
     /// Deepest interpenetration over the whole run and over its last second.
     deepest: Real,
     deepest_at_rest: Real,
@@ -313,7 +328,7 @@ impl Watch {
     /// Steps `flock` for `seconds` of `dt`, measuring the interpenetration every `every` steps
     /// and every step of the last second, calling `each` after every step; stops early on an
     /// explosion.
-    fn run(
+    pub(super) fn run(
         flock: &mut Flock,
         dt: Real,
         seconds: Real,
@@ -348,7 +363,7 @@ impl Watch {
         }
     }
 
-    fn fill(&self, r: &mut Record, flock: &Flock, size: Real) {
+    pub(super) fn fill(&self, r: &mut Record, flock: &Flock, size: Real) {
         r.max_interpenetration = Some(self.deepest as f64);
         r.rest_interpenetration = Some(self.deepest_at_rest as f64);
         let start = self.energy_start.abs().max(1e-9);

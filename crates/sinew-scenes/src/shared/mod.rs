@@ -20,6 +20,7 @@
 //! | [`VibrationScene`] | (accuracy) a free bar's first axial frequency and decay; fails if it explodes, inverts or does not ring | — |
 //! | [`TowerScene`] | a cell inverts, or bodies rest inside each other by over 1 % of their size | — |
 //! | [`PinchScene`] | the box slips over 5 cm, goes over 1 cm into the ground, or a cell inverts | — |
+//! | [`RollScene`] | a cell inverts (or the ball blows up) | — |
 //! | [`FoldScene`] | the surface passes into itself (over 1 % of a cell) or a cell inverts | — |
 
 pub mod advise;
@@ -34,6 +35,7 @@ mod limb;
 mod manipulator;
 pub mod metrics;
 mod pinch;
+mod roll;
 mod rotation_error;
 mod sim;
 mod stretch;
@@ -54,6 +56,7 @@ pub use fold::FoldScene;
 pub use limb::LimbScene;
 pub use manipulator::ManipulatorScene;
 pub use pinch::PinchScene;
+pub use roll::RollScene;
 pub use rotation_error::{spurious_acceleration, RotationErrorScene};
 pub use sim::{Sim, RAPIER_SKIN};
 pub use stretch::StretchScene;
