@@ -105,7 +105,7 @@ impl RollScene {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
-        let run = self.distance + 1.0;
+        let run = self.distance + 5.0;
         world.physics.insert(
             RigidBodyBuilder::fixed(),
             level::ramp(self.length, self.slope, run).friction(self.friction),
@@ -125,6 +125,13 @@ impl RollScene {
             })
             .collect();
         let mesh = Mesh::from_shape(&Ball::new(self.radius), self.spacing, CellKind::Simplex)?;
+        // The lattice's nodes reach past the radius: a node started on the far side of the
+        // two-sided ramp stays there and holds the ball.
+        let reach = mesh
+            .nodes()
+            .iter()
+            .map(|p| p.length())
+            .fold(self.radius, Real::max);
         // On the ramp's top, a radius down it, a few millimetres above it.
         let (s, c) = (self.slope.sin(), self.slope.cos());
         let mut top = UP * (self.length * s);
@@ -133,7 +140,7 @@ impl RollScene {
         down[0] = c;
         let mut normal = UP * c;
         normal[0] = s;
-        let centre = top + down * self.radius + normal * (self.radius + 0.005);
+        let centre = top + down * reach + normal * (reach + 0.005);
         let mut spec = BodySpec::new(mesh, centre, self.material);
         spec.friction = self.friction;
         spec.restitution = 0.0;
