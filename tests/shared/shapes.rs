@@ -227,3 +227,23 @@ fn from_shape_errors() {
     let e = Mesh::from_shape(apart.as_ref(), 10.0, CellKind::Cube).unwrap_err();
     assert!(e.to_string().contains("centre is inside"), "{e}");
 }
+
+#[test]
+fn voxelised_nodes_reach_at_most_half_a_box_diagonal_past_the_shape() {
+    // What the docs tell a user placing a voxelised body next to a two-sided surface. The
+    // largest reach is taken, so the bound is met, not loose: it is at least half of it.
+    let (radius, cell) = (0.1, 0.025);
+    let ball = Ball::new(radius);
+    let mesh = Mesh::from_shape(&ball, cell, CellKind::Simplex).unwrap();
+    let bound = 0.5 * (DIM as Real).sqrt() * cell;
+    let reach = mesh
+        .nodes()
+        .iter()
+        .map(|p| p.length() - radius)
+        .fold(Real::NEG_INFINITY, Real::max);
+    assert!(reach <= bound + 1e-6, "a node {reach} m past the ball");
+    assert!(
+        reach >= 0.5 * bound,
+        "nodes reach only {reach} m past the ball"
+    );
+}

@@ -23,7 +23,11 @@ impl Mesh {
     /// A lattice of boxes of side `cell_size` filling `shape` (in the shape's local frame):
     /// the boxes whose centre is inside the shape, split into simplices with
     /// [`CellKind::Simplex`] exactly as [`Mesh::cuboid`] splits them. The surface is
-    /// staircased at the lattice spacing; only the largest facet-connected part is kept.
+    /// staircased at the lattice spacing; only the largest facet-connected part is kept. Its
+    /// nodes, the boxes' corners, reach up to half a box diagonal (`√DIM / 2 · cell_size`) past
+    /// the shape: place the body by its nodes' extent, not the shape's, next to a two-sided
+    /// surface (a trimesh, a polyline, a heightfield), which keeps a node started on its far
+    /// side there.
     ///
     /// Any bounded shape that answers point queries works: balls, capsules, cuboids, convex
     /// polygons and polyhedra, compounds. A triangle mesh must be closed and oriented
