@@ -157,17 +157,23 @@ fn rigid_passes(
     backward: bool,
     bodies: &mut RigidBodySet,
 ) {
+    // No body two members push without two members that push one: the common case, free.
+    let pushing = live.iter().filter(|&&i| !members[i].rigid_rows.is_empty());
+    if pushing.count() < 2 {
+        return;
+    }
     let mut pushed: Vec<(RigidBodyHandle, usize)> = Vec::new();
     for &i in live {
         let m = &members[i];
         for c in &m.rigid_rows {
             if let Some(b) = m.candidates[c.candidate].rigid(&motions[i]) {
-                pushed.push((b, i));
+                if !pushed.contains(&(b, i)) {
+                    pushed.push((b, i));
+                }
             }
         }
     }
     pushed.sort_unstable_by_key(|(b, i)| (b.into_raw_parts(), *i));
-    pushed.dedup();
     let mut shared: Vec<RigidBodyHandle> = pushed
         .windows(2)
         .filter(|w| w[0].0 == w[1].0)
