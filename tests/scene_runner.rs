@@ -298,6 +298,40 @@ fn the_implicit_integrator_is_chosen_from_the_command_line() {
 }
 
 #[test]
+fn the_multi_body_scenes_take_and_record_the_integrator() {
+    let lines = run(&[
+        "pile",
+        "--dim",
+        "2",
+        "--bodies",
+        "2",
+        "--seconds",
+        "0.1",
+        "--model",
+        "edge-repulsion",
+        "--integrator",
+        "implicit",
+        "--sweeps",
+        "3",
+    ]);
+    assert_eq!(lines[0]["integrator"], "implicit");
+    assert_eq!(lines[0]["sweeps"], 3);
+    let lines = run(&[
+        "tower",
+        "--dim",
+        "2",
+        "--bodies",
+        "2",
+        "--seconds",
+        "0.1",
+        "--model",
+        "edge-repulsion",
+    ]);
+    assert_eq!(lines[0]["integrator"], "explicit");
+    assert!(lines[0]["sweeps"].is_null());
+}
+
+#[test]
 fn contact_scenes_measure_interpenetration_energy_and_cost() {
     for (scene, bodies) in [("stack", 2), ("squeeze", 3)] {
         let lines = run(&[

@@ -132,7 +132,7 @@ pub struct Args {
     /// Strikes of the manipulator (default 20).
     #[arg(long)]
     pub strikes: Option<usize>,
-    /// sinew's integrator (every scene but rotation-error, pile, squeeze, fold and advise).
+    /// sinew's integrator (every scene but rotation-error, squeeze, fold and advise).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
     /// Gauss–Seidel sweeps per step of the implicit integrator (default 10). (`--iterations`
@@ -868,6 +868,7 @@ macro_rules! dimension_runner {
                                 let scene = PileScene {
                                     subject,
                                     bodies,
+                                    integrator: cube.integrator,
                                     resolution: args.res.unwrap_or(d.resolution),
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
                                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),

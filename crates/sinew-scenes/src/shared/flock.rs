@@ -16,8 +16,8 @@ use super::super::lib::Material;
 use super::fall::{self, cuboid};
 use super::metrics::interpenetration;
 use super::sim::{
-    drive_pins, insert_soft, lumped_masses, pins_of, read_state, rest_positions, BodySpec, Pin,
-    Soft, RAPIER_SKIN,
+    self, drive_pins, insert_soft, lumped_masses, pins_of, read_state, rest_positions, BodySpec,
+    Pin, Soft, RAPIER_SKIN,
 };
 use super::subject::Subject;
 use super::Record;
@@ -278,6 +278,8 @@ impl Flock {
             dim: DIM,
             model: self.subject.name().to_string(),
             iterations: self.subject.iterations(),
+            integrator: sim::integrator_name(self.subject, self.world.pipeline.settings.integrator),
+            sweeps: sim::sweeps(self.subject, self.world.pipeline.settings.integrator),
             res,
             bodies: Some(self.members.len()),
             nodes: self.members.iter().map(|m| m.x.len()).sum(),
@@ -496,6 +498,8 @@ pub struct PileScene {
     pub dt: Real,
     /// Simulated time, s.
     pub seconds: Real,
+    /// sinew's integrator (an island of deformables that may touch steps explicitly).
+    pub integrator: Integrator,
 }
 
 impl Default for PileScene {
@@ -512,6 +516,7 @@ impl Default for PileScene {
             bowl: 0.0,
             dt: 1.0 / 60.0,
             seconds: 3.0,
+            integrator: Integrator::Explicit,
         }
     }
 }
@@ -539,6 +544,7 @@ impl PileScene {
     pub fn run(&self) -> Result<Record, BuildError> {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
+        world.pipeline.settings.integrator = self.integrator;
         let (per_row, width) = self.layout();
         world.physics.insert(
             RigidBodyBuilder::fixed(),

@@ -520,15 +520,6 @@ impl Sim {
         super::metrics::shape_error(&self.x, &self.rest, &self.masses, self.size)
     }
 
-    /// sinew's integrator's name (`None` for rapier's bodies).
-    fn integrator_name(&self) -> Option<&'static str> {
-        match (self.subject, self.world.pipeline.settings.integrator) {
-            (Subject::Rapier(_), _) => None,
-            (_, Integrator::Explicit) => Some("explicit"),
-            (_, Integrator::Implicit { .. }) => Some("implicit"),
-        }
-    }
-
     /// A record with everything common to all scenes filled in.
     pub(crate) fn record(&self, scene: &str, res: usize) -> Record {
         let params = &self.world.physics.integration_parameters;
@@ -537,11 +528,8 @@ impl Sim {
             dim: DIM,
             model: self.subject.name().to_string(),
             iterations: self.subject.iterations(),
-            integrator: self.integrator_name().map(str::to_string),
-            sweeps: match (self.subject, self.world.pipeline.settings.integrator) {
-                (Subject::Sinew(_), Integrator::Implicit { iterations }) => Some(iterations),
-                _ => None,
-            },
+            integrator: integrator_name(self.subject, self.world.pipeline.settings.integrator),
+            sweeps: sweeps(self.subject, self.world.pipeline.settings.integrator),
             res,
             nodes: self.x.len(),
             elements: self.mesh.num_cells(),
@@ -644,5 +632,22 @@ impl Bounce {
         r.failure = crate::record::failure(&failures);
         r.failed = r.failure.is_some();
         r
+    }
+}
+
+/// sinew's integrator's name for a record (`None` for rapier's bodies).
+pub(super) fn integrator_name(subject: Subject, integrator: Integrator) -> Option<String> {
+    match (subject, integrator) {
+        (Subject::Rapier(_), _) => None,
+        (_, Integrator::Explicit) => Some("explicit".to_string()),
+        (_, Integrator::Implicit { .. }) => Some("implicit".to_string()),
+    }
+}
+
+/// The implicit integrator's sweeps for a record (`None` otherwise).
+pub(super) fn sweeps(subject: Subject, integrator: Integrator) -> Option<usize> {
+    match (subject, integrator) {
+        (Subject::Sinew(_), Integrator::Implicit { iterations }) => Some(iterations),
+        _ => None,
     }
 }
