@@ -139,6 +139,9 @@ pub(crate) struct NearFacets {
     facets: Vec<u32>,
     cells_start: Vec<u32>,
     cells: Vec<u32>,
+    /// Per surface node, the cells it is a vertex of.
+    node_cells_start: Vec<u32>,
+    node_cells: Vec<u32>,
 }
 
 impl NearFacets {
@@ -161,10 +164,14 @@ impl NearFacets {
             facets: Vec::new(),
             cells_start: vec![0],
             cells: Vec::new(),
+            node_cells_start: vec![0],
+            node_cells: Vec::new(),
         };
         for &i in mesh.boundary_nodes() {
             out.facets.extend_from_slice(&facets_of[i as usize]);
             out.start.push(out.facets.len() as u32);
+            out.node_cells.extend_from_slice(&cells_of[i as usize]);
+            out.node_cells_start.push(out.node_cells.len() as u32);
         }
         let mut around = Vec::new();
         for facet in mesh.boundary_facets() {
@@ -183,6 +190,12 @@ impl NearFacets {
     /// The cells around boundary facet `f` (those with a node of it).
     pub fn cells_around(&self, f: usize) -> &[u32] {
         &self.cells[self.cells_start[f] as usize..self.cells_start[f + 1] as usize]
+    }
+
+    /// The cells surface node `k` (an index into the boundary nodes) is a vertex of.
+    pub fn cells_of_node(&self, k: usize) -> &[u32] {
+        let (a, b) = (self.node_cells_start[k], self.node_cells_start[k + 1]);
+        &self.node_cells[a as usize..b as usize]
     }
 
     /// The facets surface node `k` (an index into the boundary nodes) leaves alone.

@@ -3,11 +3,12 @@
 
 use super::super::attach::{self, DrivenNodes};
 use super::super::body::Deformable;
-use super::super::contact::soft;
+use super::super::contact::soft::{self, NearFacets};
 use super::super::contact::{self, Contact, FacetMotion, FreeNode};
 use super::super::coupling::{BodyMotion, Substep};
 use super::super::integrator::{AfterContacts, Bound, Integrate};
 use super::super::math::{Real, Vector, FACET_ARITY};
+use super::super::mesh::Mesh;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::set::DeformableHandle;
 use super::{timed, Candidates, Scratch, StageTimes, StepContext};
@@ -433,6 +434,11 @@ fn node_contacts(
         else {
             continue;
         };
+        let start = body.state.positions[n_i];
+        if x != start {
+            let rest = (&body.rest.mesh, body.rest.near_facets());
+            x = keep_cells_upright(rest, &mut body.state.positions, k, (start, x));
+        }
         body.state.positions[n_i] = x;
         let v = &mut body.state.velocities;
         let point = c.settle(v, at, candidates, bodies, &mut sc.pushed, Some(i));
@@ -443,6 +449,46 @@ fn node_contacts(
             rows.push(c);
         }
     }
+}
+
+/// Smallest quality (volume ratio) a node moved out of a collider may leave a cell of it at,
+/// unless the cell was flatter before.
+const MIN_OUT_QUALITY: Real = 0.1;
+
+/// The position of surface node `k` (an index into the boundary nodes) moved from `start`
+/// towards `out` (out of a collider it was found inside) as far as keeps each of its cells at
+/// [`MIN_OUT_QUALITY`] or no flatter than it was (halving the move up to ten times, else not
+/// moving it): a collider that rapier's step moved centimetres into a body (a spinning box
+/// knocked back into a ball by the box beside it) would have had the node moved through its
+/// own cell and inverted it; the contact holds the node where it stays, and later substeps
+/// move it on.
+fn keep_cells_upright(
+    (mesh, near): (&Mesh, &NearFacets),
+    x: &mut [Vector],
+    k: usize,
+    (start, out): (Vector, Vector),
+) -> Vector {
+    let cells = near.cells_of_node(k);
+    let node = mesh.boundary_nodes()[k] as usize;
+    x[node] = start;
+    let floors: Vec<Real> = cells
+        .iter()
+        .map(|&c| MIN_OUT_QUALITY.min(mesh.cell_quality(c as usize, x)))
+        .collect();
+    let mut step = out - start;
+    for _ in 0..=10 {
+        x[node] = start + step;
+        let upright = cells
+            .iter()
+            .zip(&floors)
+            .all(|(&c, &floor)| mesh.cell_quality(c as usize, x) >= floor);
+        if upright {
+            return x[node];
+        }
+        step *= 0.5;
+    }
+    x[node] = start;
+    start
 }
 
 /// Every surface facet against the point features of its candidates, the deepest crossing
