@@ -219,3 +219,29 @@ fn deformables_that_meet_step_explicitly_under_the_implicit_setting() {
     assert_eq!(implicit.substeps, explicit.substeps);
     assert_eq!(implicit.rest_com, explicit.rest_com);
 }
+
+#[test]
+fn a_cube_landing_at_60_hz_with_two_sweeps_creates_no_energy() {
+    // A stiff cube (E = 2 MPa, 0.4 m) dropped 10 cm lands at 1.3 m/s. Its free nodes started a
+    // frame's fall into the bottom layer the contact held, and two sweeps left that layer
+    // crushed: the landing raised the cube's energy twelvefold. The step starts them from
+    // the part of their motion that costs least.
+    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
+        let scene = crate::scenes::TowerScene {
+            subject: Subject::Sinew(model),
+            bodies: 1,
+            gap: 0.1,
+            seconds: 1.0,
+            integrator: Integrator::Implicit { iterations: 2 },
+            ..Default::default()
+        };
+        let r = scene.run().unwrap();
+        let over = r.energy_over_start.unwrap();
+        assert!(
+            over <= 1e-3,
+            "{}: energy rose {over} above its start",
+            model.name()
+        );
+        assert_eq!(r.final_inverted_elements, 0, "{}", model.name());
+    }
+}

@@ -322,7 +322,12 @@ impl ModelState {
         x.clear();
         match input.start {
             Some(start) => x.extend((0..n).map(|i| held[i].start(start[i], x0[i]))),
-            None => x.extend((0..n).map(|i| held[i].start(x0[i] + v0[i] * h, x0[i]))),
+            None => {
+                x.extend((0..n).map(|i| held[i].start(x0[i] + v0[i] * h, x0[i])));
+                if held.iter().any(|h| *h != Hold::Free) {
+                    start_scaled(elements, volume, input, (&held, &y), x);
+                }
+            }
         }
         let mut vertex = Vertex {
             springs: None,
@@ -392,6 +397,46 @@ impl ModelState {
             }
         }
         true
+    }
+}
+
+/// The fractions of each free node's inertial motion `h v₀` a step with held nodes may start
+/// from.
+const START_FRACTIONS: [Real; 3] = [1.0, 0.5, 0.0];
+
+/// Moves the free nodes' start `x` (at `x₀ + h v₀`) to whichever of [`START_FRACTIONS`] of
+/// their inertial motion has the least incremental potential (inertia and elastic energy, the
+/// sweeps' own objective): a few sweeps cannot undo a start that pressed the free nodes into
+/// the held ones (`docs/ARCHITECTURE.md` §4.2).
+fn start_scaled(
+    elements: &Elements,
+    volume: Option<&Volume>,
+    input: &StepInput<'_>,
+    (held, y): (&[Hold], &[Vector]),
+    x: &mut [Vector],
+) {
+    let (x0, h, masses) = (input.x0, input.h, input.masses);
+    let free: Vec<usize> = (0..x.len()).filter(|&i| held[i] == Hold::Free).collect();
+    let objective = |x: &[Vector]| -> Real {
+        let inertia: Real = free
+            .iter()
+            .map(|&i| masses[i] * (x[i] - y[i]).length_squared())
+            .sum();
+        inertia * (0.5 / (h * h)) + super::elastic_energy(elements, volume, x)
+    };
+    let motion: Vec<Vector> = free.iter().map(|&i| x[i] - x0[i]).collect();
+    let (mut best, mut least) = (1.0, objective(x));
+    for &fraction in &START_FRACTIONS[1..] {
+        for (&i, m) in free.iter().zip(&motion) {
+            x[i] = x0[i] + *m * fraction;
+        }
+        let g = objective(x);
+        if g < least {
+            (best, least) = (fraction, g);
+        }
+    }
+    for (&i, m) in free.iter().zip(&motion) {
+        x[i] = x0[i] + *m * best;
     }
 }
 

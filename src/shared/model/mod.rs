@@ -391,15 +391,19 @@ impl ModelState {
 
     /// Elastic (stored) energy at `x`.
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
-        let volume = self.volume.as_ref().map_or(0.0, |v| v.elastic_energy(x));
-        volume
-            + match &self.elements {
-                Elements::Springs(s) | Elements::NonlinearSprings(s) => s.elastic_energy(x),
-                Elements::CentroidSprings(s) => s.elastic_energy(x),
-                Elements::EdgeRepulsion(s) => s.elastic_energy(x),
-                Elements::ShapeMatching(s) => s.elastic_energy(x),
-            }
+        elastic_energy(&self.elements, self.volume.as_ref(), x)
     }
+}
+
+/// Elastic (stored) energy of `elements` and the volumetric term at `x`.
+fn elastic_energy(elements: &Elements, volume: Option<&volume::Volume>, x: &[Vector]) -> Real {
+    volume.map_or(0.0, |v| v.elastic_energy(x))
+        + match elements {
+            Elements::Springs(s) | Elements::NonlinearSprings(s) => s.elastic_energy(x),
+            Elements::CentroidSprings(s) => s.elastic_energy(x),
+            Elements::EdgeRepulsion(s) => s.elastic_energy(x),
+            Elements::ShapeMatching(s) => s.elastic_energy(x),
+        }
 }
 
 /// The Poisson's ratio of a model's lattice (`Mesh::cuboid`'s mirrored Kuhn simplices, small
