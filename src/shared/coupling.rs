@@ -180,6 +180,15 @@ pub(crate) fn apply_impulse(body: &mut RigidBody, impulse: Vector, point: Vector
     }
 }
 
+/// Moves `body` by `delta` without touching its velocity (its pose at the start of the step, so
+/// its path through the step moves with it): a body rapier's step carried into a deformable,
+/// moved back out by its share.
+pub(crate) fn translate(body: &mut RigidBody, delta: Vector) {
+    let mut pose = *body.position();
+    pose.translation += delta;
+    body.set_position(pose, false);
+}
+
 /// Whether a rigid body moves this step: a dynamic body that is awake, a kinematic body with
 /// a next pose or a velocity.
 pub(crate) fn is_moving(body: &RigidBody) -> bool {

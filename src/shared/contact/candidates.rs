@@ -451,6 +451,30 @@ pub(crate) fn node_candidates(
 /// After an impulse to the dynamic body behind candidate `ci`, moves that body's candidates to
 /// their end-of-substep poses predicted from its new velocity (later contacts of the same
 /// substep then see where it really goes).
+/// Moves the dynamic body of candidate `ci` by `delta` (see [`coupling::translate`]) and its
+/// candidates' poses with it, at the start of the substep as at its end.
+pub(crate) fn translate_body(
+    candidates: &mut [Candidate<'_>],
+    ci: usize,
+    delta: Vector,
+    (s1, dt): (Real, Real),
+    motions: &[BodyMotion],
+    bodies: &mut RigidBodySet,
+) {
+    let Some(rb) = candidates[ci]
+        .rigid(motions)
+        .and_then(|b| bodies.get_mut(b))
+    else {
+        return;
+    };
+    coupling::translate(rb, delta);
+    let m = candidates[ci].motion;
+    for c in candidates.iter_mut().filter(|c| c.motion == m) {
+        c.prev_pose.translation += delta;
+        c.update(s1, dt, motions, bodies);
+    }
+}
+
 pub(crate) fn refresh_poses(
     candidates: &mut [Candidate<'_>],
     ci: usize,

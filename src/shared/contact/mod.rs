@@ -64,7 +64,8 @@ pub(crate) mod soft;
 mod solve;
 
 pub(crate) use candidates::{
-    broad_phase_is_current, candidate, near_colliders, node_candidates, Candidate, Scan,
+    broad_phase_is_current, candidate, near_colliders, node_candidates, translate_body, Candidate,
+    Scan,
 };
 pub(crate) use facet::{resolve_facet, FacetMotion};
 pub(crate) use node::{penetration, resolve_node, surface_skin, FreeNode};

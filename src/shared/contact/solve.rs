@@ -91,6 +91,11 @@ impl Contact {
         }
     }
 
+    /// The contact point's material point on a dynamic body's present pose.
+    pub fn anchor(&self) -> Vector {
+        self.anchor
+    }
+
     fn velocity(&self, velocities: &[Vector]) -> Vector {
         (0..FACET_ARITY)
             .map(|a| velocities[self.nodes[a] as usize] * self.weights[a])

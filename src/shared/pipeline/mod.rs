@@ -370,6 +370,7 @@ impl DeformablePipeline {
                     asleep: false,
                     touched: Vec::new(),
                     rigid_rows: Vec::new(),
+                    shares_bodies: work.shared.iter().any(|p| p.0 == handle || p.1 == handle),
                 })
                 .collect();
             let touch = |(a, b): &(DeformableHandle, DeformableHandle)| {

@@ -84,6 +84,8 @@ pub(super) struct Member<'m, 'a> {
     pub touched: Vec<usize>,
     /// This substep's contacts with dynamic rigid bodies, solved again with the island's.
     pub rigid_rows: Vec<Contact>,
+    /// Whether another deformable may push a dynamic body it may push.
+    pub shares_bodies: bool,
 }
 
 /// Runs the substeps of a group's step, the velocities advanced by `integrator`; with `soft`,
@@ -272,6 +274,7 @@ fn advance(
     bodies: &mut RigidBodySet,
 ) {
     let g = ctx.gravity * m.body.gravity_scale;
+    let split = !m.shares_bodies;
     let body = &mut *m.body;
     let sc = &mut *m.sc;
     let answers = integrator.answers_contacts(body);
@@ -311,7 +314,7 @@ fn advance(
             // Sequential impulses in one fixed order are lopsided (a box landing flat on a
             // soft cube was kicked sideways and kept swaying): the sweeps alternate.
             let backward = stats.substeps % 2 == 1;
-            node_contacts(body, at, backward, bodies, sc, (candidates, rows));
+            node_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
             stats.facet_contacts +=
                 facet_contacts(body, at, backward, bodies, sc, (candidates, rows));
         });
@@ -340,7 +343,7 @@ fn advance(
                 timed(&mut m.times.contacts, || {
                     let backward = stats.substeps % 2 == 1;
                     rows.clear();
-                    node_contacts(body, at, backward, bodies, sc, (candidates, rows));
+                    node_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
                     stats.facet_contacts +=
                         facet_contacts(body, at, backward, bodies, sc, (candidates, rows));
                 });
@@ -404,11 +407,11 @@ fn order(backward: bool, len: usize, j: usize) -> usize {
     }
 }
 
-/// Every free surface node against its candidates; each contact found is solved at once.
+/// Every free surface node against its candidates; each contact found is solved at once. With
+/// `split`, a dynamic body found over a node is moved out by its share.
 fn node_contacts(
     body: &mut Deformable,
-    at: &Substep<'_>,
-    backward: bool,
+    (at, backward, split): (&Substep<'_>, bool, bool),
     bodies: &mut RigidBodySet,
     sc: &mut Scratch,
     (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
@@ -436,6 +439,28 @@ fn node_contacts(
         };
         let start = body.state.positions[n_i];
         if x != start {
+            // A dynamic body found over the node (rapier's step carried it there) goes back
+            // out by its share of the two inverse masses, the node by the rest; not one that
+            // another deformable may push (a box pinched between two pads would be moved
+            // into the other pad).
+            let cand = &candidates[c.candidate];
+            if split && cand.dynamic {
+                let w_body = cand.inv_mass_at(c.anchor(), c.normal, at.motions, bodies);
+                let share = w_body / (w_body + node.inv_mass);
+                if share > 0.0 && share.is_finite() {
+                    let out = x - start;
+                    let timing = (at.s1, at.dt);
+                    contact::translate_body(
+                        candidates,
+                        c.candidate,
+                        -out * share,
+                        timing,
+                        at.motions,
+                        bodies,
+                    );
+                    x = start + out * (1.0 - share);
+                }
+            }
             let rest = (&body.rest.mesh, body.rest.near_facets());
             x = keep_cells_upright(rest, &mut body.state.positions, k, (start, x));
         }
