@@ -448,9 +448,6 @@ pub(crate) fn node_candidates(
     }
 }
 
-/// After an impulse to the dynamic body behind candidate `ci`, moves that body's candidates to
-/// their end-of-substep poses predicted from its new velocity (later contacts of the same
-/// substep then see where it really goes).
 /// Moves the dynamic body of candidate `ci` by `delta` (see [`coupling::translate`]) and its
 /// candidates' poses with it, at the start of the substep as at its end.
 pub(crate) fn translate_body(
@@ -475,6 +472,9 @@ pub(crate) fn translate_body(
     }
 }
 
+/// After an impulse to the dynamic body behind candidate `ci`, moves that body's candidates to
+/// their end-of-substep poses predicted from its new velocity (later contacts of the same
+/// substep then see where it really goes).
 pub(crate) fn refresh_poses(
     candidates: &mut [Candidate<'_>],
     ci: usize,
