@@ -40,6 +40,21 @@ pub mod math {
     /// Zero angular quantity.
     pub const ANG_ZERO: AngVector = 0.0;
 
+    /// Degrees of freedom of a rigid body's velocity: 2 linear, 1 angular.
+    pub const TWIST_DIM: usize = 3;
+
+    /// A rigid velocity as one array: linear components, then angular.
+    #[inline]
+    pub fn twist_to_array(v: Vector, w: AngVector) -> [Real; TWIST_DIM] {
+        [v.x, v.y, w]
+    }
+
+    /// The rigid velocity of [`twist_to_array`]'s array.
+    #[inline]
+    pub fn twist_from_array(a: &[Real; TWIST_DIM]) -> (Vector, AngVector) {
+        (Vector::new(a[0], a[1]), a[2])
+    }
+
     /// Determinant of the `DIM` edge vectors `e`.
     #[inline]
     pub fn det(e: &[Vector]) -> Real {

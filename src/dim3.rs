@@ -41,6 +41,21 @@ pub mod math {
     /// Zero angular vector.
     pub const ANG_ZERO: AngVector = Vector::ZERO;
 
+    /// Degrees of freedom of a rigid body's velocity: 3 linear, 3 angular.
+    pub const TWIST_DIM: usize = 6;
+
+    /// A rigid velocity as one array: linear components, then angular.
+    #[inline]
+    pub fn twist_to_array(v: Vector, w: AngVector) -> [Real; TWIST_DIM] {
+        [v.x, v.y, v.z, w.x, w.y, w.z]
+    }
+
+    /// The rigid velocity of [`twist_to_array`]'s array.
+    #[inline]
+    pub fn twist_from_array(a: &[Real; TWIST_DIM]) -> (Vector, AngVector) {
+        (Vector::new(a[0], a[1], a[2]), Vector::new(a[3], a[4], a[5]))
+    }
+
     /// Determinant of the `DIM` edge vectors `e` (triple product).
     #[inline]
     pub fn det(e: &[Vector]) -> Real {

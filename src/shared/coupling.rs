@@ -164,6 +164,21 @@ pub(crate) fn inv_mass_at(body: &RigidBody, point: Vector, dir: Vector) -> Real 
         + math::ang_dot(rn, props.effective_world_inv_inertia * rn)
 }
 
+/// The velocity change `(Δv, Δω)` that `impulse` at `point` gives `body`, with rapier's
+/// effective (lock-aware) mass and inertia: what [`apply_impulse`] adds.
+pub(crate) fn impulse_response(
+    body: &RigidBody,
+    point: Vector,
+    impulse: Vector,
+) -> (Vector, AngVector) {
+    let props = body.mass_properties();
+    let torque = math::cross(point - body.center_of_mass(), impulse);
+    (
+        props.effective_inv_mass * impulse,
+        props.effective_world_inv_inertia * torque,
+    )
+}
+
 /// Gives `body` `impulse` at `point`: its velocity changes at once, and its pose is moved back
 /// by the velocity change over `elapsed` (the time of the step already gone), so that where it
 /// is now stays put (see [`Candidate::apply_impulse`](super::contact::Candidate::apply_impulse)).

@@ -106,6 +106,7 @@ pub(crate) fn resolve_facet(
         target: vn - d / h,
         normal_impulse: 0.0,
         friction_impulse: Vector::ZERO,
+        deferred: false,
     })
 }
 

@@ -55,8 +55,10 @@
 //!
 //! Files: [`candidates`] (the broad phase and each candidate's motion and features), `node`
 //! (nodes against colliders), `facet` (rigid features against surface facets), `solve` (the
-//! velocity update of one contact).
+//! velocity update of one contact), [`block`] (a dynamic body and all the contacts that push it
+//! in a substep, solved together).
 
+pub(crate) mod block;
 pub(crate) mod candidates;
 mod facet;
 mod node;

@@ -142,6 +142,7 @@ pub(crate) fn resolve_node(
         target,
         normal_impulse: 0.0,
         friction_impulse: Vector::ZERO,
+        deferred: false,
     })
 }
 

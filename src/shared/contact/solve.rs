@@ -35,6 +35,10 @@ pub(crate) struct Contact {
     pub(super) target: Real,
     pub(super) normal_impulse: Real,
     pub(super) friction_impulse: Vector,
+    /// The dynamic body has not taken this contact's impulses yet: the deformable side alone
+    /// answered it, the body meeting it at its velocity, until the body's block solve
+    /// ([`super::block`]) shares them out.
+    pub(super) deferred: bool,
 }
 
 impl Contact {
@@ -61,18 +65,14 @@ impl Contact {
         }
     }
 
-    /// Solves the contact once more, from the impulses it has given so far (a later pass of
-    /// the island's contacts with a dynamic body), and brings that body's candidates to its new
-    /// predicted pose.
-    pub fn solve_again(
-        &mut self,
-        velocities: &mut [Vector],
-        at: &Substep<'_>,
-        candidates: &mut [Candidate<'_>],
-        bodies: &mut RigidBodySet,
-    ) {
-        self.solve(velocities, at, candidates, bodies);
-        refresh_poses(candidates, self.candidate, at.s1, at.dt, at.motions, bodies);
+    /// Leaves the dynamic body out of this contact's impulses until its block solve.
+    pub fn defer_body(&mut self) {
+        self.deferred = true;
+    }
+
+    /// Whether the dynamic body still has this contact's impulses to take.
+    pub fn deferred(&self) -> bool {
+        self.deferred
     }
 
     /// Adds the dynamic body it pushed (with a non-zero normal impulse), if any, to `pushed`.
@@ -96,19 +96,47 @@ impl Contact {
         self.anchor
     }
 
-    fn velocity(&self, velocities: &[Vector]) -> Vector {
+    /// The deformable side's velocity at the contact.
+    pub(super) fn velocity(&self, velocities: &[Vector]) -> Vector {
         (0..FACET_ARITY)
             .map(|a| velocities[self.nodes[a] as usize] * self.weights[a])
             .sum()
     }
 
-    fn inv_mass(&self) -> Real {
+    /// The deformable side's inverse mass at the contact: `Σ w² / m`.
+    pub(super) fn inv_mass(&self) -> Real {
         (0..FACET_ARITY)
             .map(|a| self.weights[a] * self.weights[a] * self.inv_masses[a])
             .sum()
     }
 
-    /// `impulse` on the deformable's side, its opposite on a dynamic body.
+    /// Counts this contact once on each node it acts on, in `counts`.
+    pub(super) fn count_nodes(&self, counts: &mut [Real]) {
+        for a in 0..FACET_ARITY {
+            if self.weights[a] > 0.0 {
+                counts[self.nodes[a] as usize] += 1.0;
+            }
+        }
+    }
+
+    /// [`Contact::inv_mass`] with each node's mass split among the `counts` contacts on it.
+    pub(super) fn split_inv_mass(&self, counts: &[Real]) -> Real {
+        (0..FACET_ARITY)
+            .map(|a| {
+                let share = counts[self.nodes[a] as usize].max(1.0);
+                self.weights[a] * self.weights[a] * self.inv_masses[a] * share
+            })
+            .sum()
+    }
+
+    /// `impulse` on the deformable's side alone.
+    pub(super) fn give(&self, impulse: Vector, velocities: &mut [Vector]) {
+        for a in 0..FACET_ARITY {
+            velocities[self.nodes[a] as usize] += impulse * (self.weights[a] * self.inv_masses[a]);
+        }
+    }
+
+    /// `impulse` on the deformable's side, its opposite on a dynamic body (unless deferred).
     fn apply(
         &self,
         impulse: Vector,
@@ -117,10 +145,10 @@ impl Contact {
         at: &Substep<'_>,
         bodies: &mut RigidBodySet,
     ) {
-        for a in 0..FACET_ARITY {
-            velocities[self.nodes[a] as usize] += impulse * (self.weights[a] * self.inv_masses[a]);
+        self.give(impulse, velocities);
+        if !self.deferred {
+            cand.apply_impulse(-impulse, self.anchor, at.motions, bodies, at.dt);
         }
-        cand.apply_impulse(-impulse, self.anchor, at.motions, bodies, at.dt);
     }
 
     /// One Gauss–Seidel update: the normal impulse towards the target, then friction.
@@ -140,7 +168,15 @@ impl Contact {
             this.velocity(velocities)
                 - cand.anchored_velocity(point, anchor, s1, dt, motions, bodies)
         };
-        let k = own + cand.inv_mass_at(anchor, n, motions, bodies);
+        let deferred = self.deferred;
+        let body_at = |dir: Vector, bodies: &RigidBodySet| {
+            if deferred {
+                0.0
+            } else {
+                cand.inv_mass_at(anchor, dir, motions, bodies)
+            }
+        };
+        let k = own + body_at(n, bodies);
         if k > 0.0 {
             let vn = relative(self, velocities, bodies).dot(n);
             let total = (self.normal_impulse + (self.target - vn) / k).max(0.0);
@@ -157,7 +193,7 @@ impl Contact {
         let mut total = self.friction_impulse;
         if slip > 0.0 {
             let t = vt / slip;
-            let kt = own + cand.inv_mass_at(anchor, t, motions, bodies);
+            let kt = own + body_at(t, bodies);
             if kt > 0.0 {
                 total -= t * (slip / kt);
             }

@@ -15,8 +15,8 @@ use super::{timed, Candidates, Scratch, StageTimes, StepContext};
 
 /// Most feature crossings resolved per surface facet and substep.
 const FACET_PASSES: usize = 8;
-/// Passes over a substep's contacts with dynamic rigid bodies after the first.
-const RIGID_PASSES: usize = 10;
+/// Block solves of each dynamic rigid body two members push, per substep.
+const BLOCK_PASSES: usize = 2;
 
 /// What the substep loop did.
 #[derive(Copy, Clone, Debug, Default)]
@@ -145,12 +145,12 @@ pub(super) fn run(
     }
 }
 
-/// Passes over the substep's contacts with the dynamic rigid bodies that two or more members
-/// push, after the first (which found and solved them): a light box squeezed between two pads
-/// takes one pad's push, then the other's, and in one pass the second pad's nodes take the
-/// box's rebound and fly off it; the passes bring the pads' impulses on it to balance. A body
-/// only one member pushes keeps the single pass (that member's sweep already meets it node
-/// after node).
+/// The substep's contacts with each dynamic rigid body that two or more members push, solved
+/// again with that body as one block ([`contact::block`]): a light box squeezed between two
+/// pads takes one pad's push, then the other's, in the first pass; the block solve gives it
+/// the balance of both. Rows sharing nodes (or two bodies sharing a node) meet through the
+/// velocities between the block passes. A body only one member pushes keeps the single pass
+/// (that member's sweep already meets it node after node).
 fn rigid_passes(
     members: &mut [Member<'_, '_>],
     live: &[usize],
@@ -160,11 +160,6 @@ fn rigid_passes(
     backward: bool,
     bodies: &mut RigidBodySet,
 ) {
-    // No body two members push without two members that push one: the common case, free.
-    let pushing = live.iter().filter(|&&i| !members[i].rigid_rows.is_empty());
-    if pushing.count() < 2 {
-        return;
-    }
     let mut pushed: Vec<(RigidBodyHandle, usize)> = Vec::new();
     for &i in live {
         let m = &members[i];
@@ -182,25 +177,43 @@ fn rigid_passes(
         .filter(|w| w[0].0 == w[1].0)
         .map(|w| w[0].0)
         .collect();
+    for &i in live {
+        let m = &members[i];
+        for c in m.rigid_rows.iter().filter(|c| c.deferred()) {
+            shared.extend(m.candidates[c.candidate].rigid(&motions[i]));
+        }
+    }
+    shared.sort_unstable_by_key(|b| b.into_raw_parts());
     shared.dedup();
     if shared.is_empty() {
         return;
     }
-    for pass in 0..RIGID_PASSES {
-        let backward = backward != (pass % 2 == 0);
-        for j in 0..live.len() {
-            let i = live[order(backward, live.len(), j)];
-            let m = &mut members[i];
-            let at = substep_at(ctx, m.sc.skin, h, t, &motions[i]);
-            let rows = &mut m.rigid_rows;
-            let n = rows.len();
-            for k in 0..n {
-                let c = &mut rows[order(backward, n, k)];
-                let body = m.candidates[c.candidate].rigid(&motions[i]);
-                if body.is_some_and(|b| shared.contains(&b)) {
-                    c.solve_again(&mut m.body.state.velocities, &at, &mut m.candidates, bodies);
-                }
+    if backward {
+        shared.reverse();
+    }
+    let mut picked: Vec<Vec<usize>> = vec![Vec::new(); members.len()];
+    for _ in 0..BLOCK_PASSES {
+        for &body in &shared {
+            for &i in live {
+                let m = &members[i];
+                picked[i].clear();
+                picked[i].extend((0..m.rigid_rows.len()).filter(|&k| {
+                    m.candidates[m.rigid_rows[k].candidate].rigid(&motions[i]) == Some(body)
+                }));
             }
+            let mut sides: Vec<contact::block::BlockSide<'_, '_>> = members
+                .iter_mut()
+                .enumerate()
+                .filter(|(i, m)| m.live && !picked[*i].is_empty())
+                .map(|(i, m)| contact::block::BlockSide {
+                    at: substep_at(ctx, m.sc.skin, h, t, &motions[i]),
+                    rows: &mut m.rigid_rows,
+                    picked: &picked[i],
+                    velocities: &mut m.body.state.velocities,
+                    candidates: &mut m.candidates,
+                })
+                .collect();
+            contact::block::solve(&mut sides, body, bodies);
         }
     }
 }
@@ -316,7 +329,7 @@ fn advance(
             let backward = stats.substeps % 2 == 1;
             node_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
             stats.facet_contacts +=
-                facet_contacts(body, at, backward, bodies, sc, (candidates, rows));
+                facet_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
         });
         // An implicit integrator lets the rest of the body answer the contacts within the
         // step, then the contacts see the result.
@@ -345,7 +358,7 @@ fn advance(
                     rows.clear();
                     node_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
                     stats.facet_contacts +=
-                        facet_contacts(body, at, backward, bodies, sc, (candidates, rows));
+                        facet_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
                 });
             }
         }
@@ -465,6 +478,9 @@ fn node_contacts(
             x = keep_cells_upright(rest, &mut body.state.positions, k, (start, x));
         }
         body.state.positions[n_i] = x;
+        if !split && candidates[c.candidate].dynamic {
+            c.defer_body();
+        }
         let v = &mut body.state.velocities;
         let point = c.settle(v, at, candidates, bodies, &mut sc.pushed, Some(i));
         sc.touched_nodes[k] = true;
@@ -520,8 +536,7 @@ fn keep_cells_upright(
 /// first; returns how many contacts were solved.
 fn facet_contacts(
     body: &mut Deformable,
-    at: &Substep<'_>,
-    backward: bool,
+    (at, backward, split): (&Substep<'_>, bool, bool),
     bodies: &mut RigidBodySet,
     sc: &mut Scratch,
     (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
@@ -564,6 +579,9 @@ fn facet_contacts(
             let Some(mut c) = contact::resolve_facet(&motion, at, ids, candidates, bodies) else {
                 break;
             };
+            if !split && candidates[c.candidate].dynamic {
+                c.defer_body();
+            }
             let v = &mut body.state.velocities;
             let point = c.settle(v, at, candidates, bodies, &mut sc.pushed, None);
             body.last.contacts.push(point);
