@@ -859,7 +859,7 @@ macro_rules! dimension_runner {
                                 seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                 ..d
                             };
-                            vec![scene.run().map_err(err)?]
+                            vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
                         }
                         Scene::Pile => {
                             let d = PileScene::default();
@@ -874,7 +874,8 @@ macro_rules! dimension_runner {
                                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                     ..d
                                 };
-                                out.push(scene.run().map_err(err)?);
+                                let run = format!("{name} {bodies} bodies");
+                                out.push(observed(args, run, |o| scene.run_with(o)).map_err(err)?);
                             }
                             out
                         }
@@ -893,7 +894,8 @@ macro_rules! dimension_runner {
                                     material: material(args, d.material),
                                     ..d
                                 };
-                                out.push(scene.run().map_err(err)?);
+                                let run = format!("{name} {bodies} bodies");
+                                out.push(observed(args, run, |o| scene.run_with(o)).map_err(err)?);
                             }
                             out
                         }
@@ -909,7 +911,8 @@ macro_rules! dimension_runner {
                                     material: material(args, d.material),
                                     ..d
                                 };
-                                out.push(scene.run().map_err(err)?);
+                                let run = format!("{name} {mass} kg");
+                                out.push(observed(args, run, |o| scene.run_with(o)).map_err(err)?);
                             }
                             out
                         }
@@ -926,7 +929,8 @@ macro_rules! dimension_runner {
                                     material: material(args, d.material),
                                     ..d
                                 };
-                                out.push(scene.run().map_err(err)?);
+                                let run = format!("{name} {mass} kg");
+                                out.push(observed(args, run, |o| scene.run_with(o)).map_err(err)?);
                             }
                             out
                         }
@@ -939,7 +943,7 @@ macro_rules! dimension_runner {
                                 seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                 ..d
                             };
-                            vec![scene.run().map_err(err)?]
+                            vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
                         }
                         Scene::Vibration => {
                             let d = VibrationScene::default();

@@ -21,7 +21,12 @@ fn two_soft_pads_lift_a_box_at_60_hz_without_slip() {
         // Cheap in 2D: the same at 1 ms, and under the implicit setting at 60 Hz.
         for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
             runs.push((model, 0.1, 1e-3, Integrator::Explicit));
-            runs.push((model, 0.1, 1.0 / 60.0, Integrator::Implicit { iterations: 10 }));
+            runs.push((
+                model,
+                0.1,
+                1.0 / 60.0,
+                Integrator::Implicit { iterations: 10 },
+            ));
         }
     }
     for (model, mass, dt, integrator) in runs {

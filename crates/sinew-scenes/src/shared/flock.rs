@@ -328,14 +328,14 @@ impl Watch {
     }
 
     /// Steps `flock` for `seconds` of `dt`, measuring the interpenetration every `every` steps
-    /// and every step of the last second, calling `each` after every step; stops early on an
-    /// explosion.
+    /// and every step of the last second, calling `each` and then `observe` (with the world and
+    /// the fraction done) after every step; stops early on an explosion.
     pub(super) fn run(
         flock: &mut Flock,
-        dt: Real,
-        seconds: Real,
+        (dt, seconds): (Real, Real),
         every: usize,
         mut each: impl FnMut(&Flock),
+        observe: &mut dyn FnMut(&DeformableWorld, f64),
     ) -> Watch {
         let steps = (seconds / dt).round() as usize;
         let rest_from = steps.saturating_sub((1.0 / dt).round() as usize);
@@ -344,6 +344,7 @@ impl Watch {
             flock.step();
             watch.observe(flock, k >= rest_from, k % every.max(1) == 0);
             each(flock);
+            observe(&flock.world, (k + 1) as f64 / steps as f64);
             if flock.exploded {
                 break;
             }
@@ -456,6 +457,14 @@ impl Default for StackScene {
 impl StackScene {
     /// Runs the drop.
     pub fn run(&self) -> Result<Record, BuildError> {
+        self.run_with(|_, _| {})
+    }
+
+    /// [`Self::run`], calling `observe` after every step with the world and the fraction done.
+    pub fn run_with(
+        &self,
+        mut observe: impl FnMut(&DeformableWorld, f64),
+    ) -> Result<Record, BuildError> {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
@@ -466,7 +475,7 @@ impl StackScene {
         at[0] = self.offset;
         let upper = BodySpec::new(mesh, at, self.material);
         let mut flock = Flock::new(world, self.subject, vec![lower, upper])?;
-        let watch = Watch::run(&mut flock, self.dt, self.seconds, 1, |_| {});
+        let watch = Watch::run(&mut flock, (self.dt, self.seconds), 1, |_| {}, &mut observe);
         let mut r = flock.record("stack", self.resolution);
         r.young = self.material.young_modulus as f64;
         r.rest_com = Some(flock.com_height(1) as f64);
@@ -542,6 +551,14 @@ impl PileScene {
 
     /// Runs the drop.
     pub fn run(&self) -> Result<Record, BuildError> {
+        self.run_with(|_, _| {})
+    }
+
+    /// [`Self::run`], calling `observe` after every step with the world and the fraction done.
+    pub fn run_with(
+        &self,
+        mut observe: impl FnMut(&DeformableWorld, f64),
+    ) -> Result<Record, BuildError> {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
@@ -573,9 +590,13 @@ impl PileScene {
         let mut lowest = Real::INFINITY;
         // The interpenetration of many bodies is costly: every tenth step, then each step of
         // the last second.
-        let watch = Watch::run(&mut flock, self.dt, self.seconds, 10, |f| {
-            lowest = lowest.min(f.lowest());
-        });
+        let watch = Watch::run(
+            &mut flock,
+            (self.dt, self.seconds),
+            10,
+            |f| lowest = lowest.min(f.lowest()),
+            &mut observe,
+        );
         let mut r = flock.record("pile", self.resolution);
         r.young = self.material.young_modulus as f64;
         r.max_penetration = Some((-lowest).max(0.0) as f64);
@@ -624,6 +645,14 @@ impl Default for SqueezeScene {
 impl SqueezeScene {
     /// Runs the squeeze.
     pub fn run(&self) -> Result<Record, BuildError> {
+        self.run_with(|_, _| {})
+    }
+
+    /// [`Self::run`], calling `observe` after every step with the world and the fraction done.
+    pub fn run_with(
+        &self,
+        mut observe: impl FnMut(&DeformableWorld, f64),
+    ) -> Result<Record, BuildError> {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         ground(&mut world, 5.0);
@@ -650,7 +679,7 @@ impl SqueezeScene {
             ColliderBuilder::new(cuboid(box_half)).density(self.load / box_volume),
         );
         let mut flock = Flock::new(world, self.subject, specs)?;
-        let watch = Watch::run(&mut flock, self.dt, self.seconds, 1, |_| {});
+        let watch = Watch::run(&mut flock, (self.dt, self.seconds), 1, |_| {}, &mut observe);
         let mut r = flock.record(
             "squeeze",
             (2.0 * self.radius / self.spacing).round() as usize,
@@ -756,6 +785,14 @@ impl TowerScene {
 
     /// Runs the tower.
     pub fn run(&self) -> Result<Record, BuildError> {
+        self.run_with(|_, _| {})
+    }
+
+    /// [`Self::run`], calling `observe` after every step with the world and the fraction done.
+    pub fn run_with(
+        &self,
+        mut observe: impl FnMut(&DeformableWorld, f64),
+    ) -> Result<Record, BuildError> {
         if self.bodies == 0 {
             return Err(BuildError::InvalidParameter {
                 name: "bodies",
@@ -771,7 +808,7 @@ impl TowerScene {
             Subject::Rapier(_) => RAPIER_SKIN,
         };
         let built = skin + top as Real * (self.size + 2.0 * skin) + 0.5 * self.size;
-        let watch = Watch::run(&mut flock, self.dt, self.seconds, 1, |_| {});
+        let watch = Watch::run(&mut flock, (self.dt, self.seconds), 1, |_| {}, &mut observe);
         let mut r = flock.record("tower", self.resolution);
         r.young = self.material.young_modulus as f64;
         r.poisson = self.material.poisson_ratio as f64;

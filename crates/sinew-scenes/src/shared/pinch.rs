@@ -145,6 +145,14 @@ impl PinchScene {
 
     /// Runs the pinch.
     pub fn run(&self) -> Result<Record, BuildError> {
+        self.run_with(|_, _| {})
+    }
+
+    /// [`Self::run`], calling `observe` after every step with the world and the fraction done.
+    pub fn run_with(
+        &self,
+        mut observe: impl FnMut(&DeformableWorld, f64),
+    ) -> Result<Record, BuildError> {
         let (mut flock, box_body, fingers) = self.build()?;
         let start: [Vector; 2] = fingers.map(|f| flock.world.physics.bodies[f].translation());
         let total: Real = self.timeline.iter().sum();
@@ -164,6 +172,7 @@ impl PinchScene {
                 }
             }
             walls.push(flock.step());
+            observe(&flock.world, (k + 1) as f64 / steps as f64);
             let finger_velocity = UP * ((lifted - finger_motion(self, t).1) / self.dt);
             let finger_height = flock.world.physics.bodies[fingers[0]].translation().dot(UP);
             let body = &flock.world.physics.bodies[box_body];

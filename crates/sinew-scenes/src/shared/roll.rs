@@ -102,6 +102,14 @@ impl RollScene {
 
     /// Runs the roll.
     pub fn run(&self) -> Result<Record, BuildError> {
+        self.run_with(|_, _| {})
+    }
+
+    /// [`Self::run`], calling `observe` after every step with the world and the fraction done.
+    pub fn run_with(
+        &self,
+        mut observe: impl FnMut(&DeformableWorld, f64),
+    ) -> Result<Record, BuildError> {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
@@ -146,11 +154,13 @@ impl RollScene {
         spec.restitution = 0.0;
         let mut flock = Flock::new(world, self.subject, vec![spec])?;
         let mut deepest: Option<Real> = None;
-        let watch = Watch::run(&mut flock, self.dt, self.seconds, 1, |f| {
+        let deepest_of = |f: &Flock| {
             if let Some(d) = f.deepest_node_penetration() {
                 deepest = Some(deepest.unwrap_or(0.0).max(d));
             }
-        });
+        };
+        let timing = (self.dt, self.seconds);
+        let watch = Watch::run(&mut flock, timing, 1, deepest_of, &mut observe);
         let mut r = flock.record("roll", (2.0 * self.radius / self.spacing).round() as usize);
         r.young = self.material.young_modulus as f64;
         r.poisson = self.material.poisson_ratio as f64;
