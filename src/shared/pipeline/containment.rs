@@ -3,7 +3,7 @@
 use super::super::body::Deformable;
 use super::super::math::{Real, Vector, DIM};
 use super::super::rapier::dynamics::RigidBodySet;
-use super::{Scratch, StepContext};
+use super::{RigidHold, StepContext, Touch};
 
 /// Checks the state after the substeps: non-finite, so far out that it can only be a blow-up
 /// (|x| or |v| above 1e8), or a cell stretched past `max_stretch` in every direction. Such a
@@ -16,7 +16,7 @@ pub(super) fn contain(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
-    sc: &mut Scratch,
+    (rigid, touch): (&RigidHold, &mut Touch),
 ) -> Option<Quality> {
     let sane = |v: &Vector| v.is_finite() && v.abs().max_element() < 1e8;
     let finite = body.state.positions.iter().all(sane) && body.state.velocities.iter().all(sane);
@@ -30,8 +30,8 @@ pub(super) fn contain(
         body.activation.frozen = true;
         // A blow-up must not launch the bodies it pushed; restored, they took no impulse of
         // this body's and get no compensation for one.
-        sc.backup.restore(bodies);
-        sc.pushed.clear();
+        rigid.backup.restore(bodies);
+        touch.pushed.clear();
     }
     quality.filter(|_| !exploded)
 }

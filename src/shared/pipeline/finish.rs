@@ -20,18 +20,22 @@ pub(super) fn diagnose(
     stats: SubstepStats,
     quality: Option<Quality>,
 ) {
-    sc.contacts.clear();
-    sc.contacts
-        .extend(sc.last_contact.iter().flatten().copied());
-    sc.contacts.append(&mut body.last.contacts);
-    std::mem::swap(&mut body.last.contacts, &mut sc.contacts);
+    sc.touch.contacts.clear();
+    sc.touch
+        .contacts
+        .extend(sc.touch.last_contact.iter().flatten().copied());
+    sc.touch.contacts.append(&mut body.last.contacts);
+    std::mem::swap(&mut body.last.contacts, &mut sc.touch.contacts);
     let mut max_penetration: Real = 0.0;
     for (k, &i) in body.rest.mesh.boundary_nodes().iter().enumerate() {
-        let (b0, b1) = (sc.node_start[k] as usize, sc.node_start[k + 1] as usize);
+        let (b0, b1) = (
+            sc.broad.node_start[k] as usize,
+            sc.broad.node_start[k + 1] as usize,
+        );
         if b0 < b1 {
             max_penetration = max_penetration.max(contact::penetration(
                 body.state.positions[i as usize],
-                &sc.node_cands[b0..b1],
+                &sc.broad.node_cands[b0..b1],
                 candidates,
             ));
         }
@@ -39,12 +43,12 @@ pub(super) fn diagnose(
     let quality = quality.unwrap_or_else(|| Quality::of(body, Real::INFINITY));
     let r = &mut body.last.report;
     r.frozen = body.activation.frozen;
-    r.teleported = sc.teleported;
+    r.teleported = sc.bones.teleported;
     r.substeps = stats.substeps;
     r.limiter_substeps = stats.limiter_substeps;
     r.substep_cap_hit = stats.cap_hit;
     r.lost_time = stats.lost_time;
-    r.contacts = sc.touched_nodes.iter().filter(|t| **t).count();
+    r.contacts = sc.touch.touched_nodes.iter().filter(|t| **t).count();
     r.facet_contacts = stats.facet_contacts;
     r.soft_contacts = stats.soft_contacts;
     r.self_contacts = stats.self_contacts;
@@ -86,26 +90,37 @@ pub(super) fn send_events(
     sc: &mut Scratch,
     events: &dyn DeformableEventHandler,
 ) {
-    sc.now.clear();
-    sc.now.extend(
-        sc.near
+    sc.touch.now.clear();
+    sc.touch.now.extend(
+        sc.broad
+            .near
             .iter()
-            .zip(&sc.touched_colliders)
+            .zip(&sc.touch.touched_colliders)
             .filter(|(_, t)| **t)
             .map(|(h, _)| *h),
     );
-    sc.now.sort_unstable_by_key(|h| h.into_raw_parts());
-    for c in body.last.touching.iter().filter(|c| !sc.now.contains(c)) {
+    sc.touch.now.sort_unstable_by_key(|h| h.into_raw_parts());
+    for c in body
+        .last
+        .touching
+        .iter()
+        .filter(|c| !sc.touch.now.contains(c))
+    {
         events.handle_contact_event(DeformableContactEvent::Stopped {
             deformable: handle,
             collider: *c,
         });
     }
-    for c in sc.now.iter().filter(|c| !body.last.touching.contains(c)) {
+    for c in sc
+        .touch
+        .now
+        .iter()
+        .filter(|c| !body.last.touching.contains(c))
+    {
         events.handle_contact_event(DeformableContactEvent::Started {
             deformable: handle,
             collider: *c,
         });
     }
-    std::mem::swap(&mut body.last.touching, &mut sc.now);
+    std::mem::swap(&mut body.last.touching, &mut sc.touch.now);
 }

@@ -163,9 +163,24 @@ struct Work {
     touching_now: Vec<(DeformableHandle, DeformableHandle)>,
 }
 
-/// One body's buffers, reused from step to step.
+/// One body's buffers, reused from step to step, by the phase that fills them.
 #[derive(Clone, Debug, Default)]
 struct Scratch {
+    /// Phase 2's broad phase: what the body may touch this step.
+    broad: Broad,
+    /// What the substeps' contacts touched (for the events, the report and sleep).
+    touch: Touch,
+    /// The bone drive's view of the bindings.
+    bones: BoneDrive,
+    /// The dynamic rigid bodies the body may push or holds.
+    rigid: RigidHold,
+    /// Its surface as the other members of its group meet it, and theirs near it.
+    soft: SoftScratch,
+}
+
+/// What the body may touch this step (phase 2).
+#[derive(Clone, Debug, Default)]
+struct Broad {
     near: Vec<ColliderHandle>,
     motions: Vec<BodyMotion>,
     attached_bodies: Vec<RigidBodyHandle>,
@@ -175,28 +190,48 @@ struct Scratch {
     /// Per surface facet (CSR): candidate indices.
     facet_start: Vec<u32>,
     facet_cands: Vec<u32>,
+    /// How far off two-sided surfaces this body's nodes are kept.
+    skin: Real,
+}
+
+/// What the body's contacts touched this step.
+#[derive(Clone, Debug, Default)]
+struct Touch {
     touched_nodes: Vec<bool>,
     touched_colliders: Vec<bool>,
     /// Dynamic bodies that took contact impulses this step.
     pushed: Vec<RigidBodyHandle>,
     last_contact: Vec<Option<ContactPoint>>,
+    /// Colliders touched this step (for the events), and the contacts being assembled.
+    now: Vec<ColliderHandle>,
+    contacts: Vec<ContactPoint>,
+}
+
+/// The bindings as the bone drive moves them.
+#[derive(Clone, Debug, Default)]
+struct BoneDrive {
     /// Per binding: where its node ends the substep (fixed and kinematic bones).
     targets: Vec<Option<Vector>>,
     /// Per binding: index into `motions` (`None`: its body is gone).
     attachment_motion: Vec<Option<usize>>,
-    /// Colliders touched this step (for the events), and the contacts being assembled.
-    now: Vec<ColliderHandle>,
-    contacts: Vec<ContactPoint>,
+    /// Whether the body was carried along with bones that jumped this step.
+    teleported: bool,
+}
+
+/// The dynamic rigid bodies the body may push or holds.
+#[derive(Clone, Debug, Default)]
+struct RigidHold {
     /// The dynamic bodies a deformable may push this step, as they were before it.
     backup: RigidBackup,
     /// The dynamic bodies a deformable holds (touches or is bound to).
     held: Vec<RigidBodyHandle>,
     /// The dynamic bodies it held as it fell asleep this step.
     to_sleep: Vec<RigidBodyHandle>,
-    /// How far off two-sided surfaces this body's nodes are kept.
-    skin: Real,
-    /// Whether the body was carried along with bones that jumped this step.
-    teleported: bool,
+}
+
+/// Soft contact's tables for the body.
+#[derive(Clone, Debug, Default)]
+struct SoftScratch {
     /// Its surface as the other members of its group meet it this step.
     soft_surface: SoftSurface,
     /// Per surface node (CSR): the other members' facets near it, `(member, facet)`.
@@ -380,12 +415,12 @@ impl DeformablePipeline {
             let shared = (soft, &work.shared[..]);
             step_group(&mut members, shared, ctx, bodies, events, &mut self.report);
             for m in members.iter_mut() {
-                for h in &m.sc.pushed {
+                for h in &m.sc.touch.pushed {
                     if !work.pushed.contains(h) {
                         work.pushed.push(*h);
                     }
                 }
-                work.to_sleep.append(&mut m.sc.to_sleep);
+                work.to_sleep.append(&mut m.sc.rigid.to_sleep);
             }
         }
         drop(slots);
@@ -423,16 +458,16 @@ fn step_group<'a>(
     let mut detached = Vec::with_capacity(members.len());
     for m in members.iter_mut() {
         let (body, sc) = (&mut *m.body, &mut *m.sc);
-        sc.pushed.clear();
+        sc.touch.pushed.clear();
         detached.push(body.prune_attachments(bodies));
         // 1. wake
-        sleep::stays_asleep(body, ctx, bodies, sc);
+        sleep::stays_asleep(body, ctx, bodies, &mut sc.broad);
     }
     sleep::wake_linked(members, shared);
     for m in members.iter_mut() {
         let (body, sc) = (&mut *m.body, &mut *m.sc);
         let asleep = body.activation.sleeping;
-        sleep::wake_held_bodies(body, ctx, bodies, sc);
+        sleep::wake_held_bodies(body, ctx, bodies, &mut sc.rigid);
         m.asleep = asleep;
         m.live = !asleep && !body.activation.frozen && ctx.dt > 0.0;
         if !asleep {
@@ -454,7 +489,9 @@ fn step_group<'a>(
     if soft {
         for m in members.iter_mut() {
             let still = !m.live;
-            m.sc.soft_surface.build(m.body, ctx.gravity, ctx.dt, still);
+            m.sc.soft
+                .soft_surface
+                .build(m.body, ctx.gravity, ctx.dt, still);
         }
         // A still member's nodes too: a live member's facets must not creep into them.
         for i in 0..members.len() {
@@ -505,11 +542,11 @@ fn check_member(
     let (body, sc) = (&mut *m.body, &mut *m.sc);
     let integrate_start = Instant::now();
     // 4. containment
-    let quality = containment::contain(body, ctx, bodies, sc);
+    let quality = containment::contain(body, ctx, bodies, (&sc.rigid, &mut sc.touch));
     body.refit_surface();
     // 5. report
     finish::diagnose(body, sc, &m.candidates, m.stats, quality);
-    let ready = sleep::update(body, ctx, bodies, sc, quality.is_some());
+    let ready = sleep::update(body, ctx, bodies, &sc.broad, quality.is_some());
     m.times.integrate = integrate_start.elapsed().as_secs_f64();
     Some(ready)
 }
@@ -550,23 +587,23 @@ fn touching_pairs(set: &DeformableSet, out: &mut Vec<(DeformableHandle, Deformab
 /// The soft-contact tables of member `i` against the other members' surfaces (and its own,
 /// with self contact).
 fn soft_tables(members: &mut [Member<'_, '_>], i: usize, ctx: &StepContext<'_>) {
-    let mut start = std::mem::take(&mut members[i].sc.soft_start);
-    let mut cands = std::mem::take(&mut members[i].sc.soft_cands);
+    let mut start = std::mem::take(&mut members[i].sc.soft.soft_start);
+    let mut cands = std::mem::take(&mut members[i].sc.soft.soft_cands);
     let m = &members[i];
     let others = members
         .iter()
         .enumerate()
         .filter(move |(j, _)| *j != i)
-        .map(|(j, o)| (j, &o.sc.soft_surface));
+        .map(|(j, o)| (j, &o.sc.soft.soft_surface));
     let own = m
         .body
         .contact
         .self_contact
-        .then_some((i, &m.sc.soft_surface));
-    let widen = m.sc.soft_surface.margin() + ctx.margin;
+        .then_some((i, &m.sc.soft.soft_surface));
+    let widen = m.sc.soft.soft_surface.margin() + ctx.margin;
     soft::node_tables(m.body, others, own, ctx.dt, widen, &mut start, &mut cands);
-    members[i].sc.soft_start = start;
-    members[i].sc.soft_cands = cands;
+    members[i].sc.soft.soft_start = start;
+    members[i].sc.soft.soft_cands = cands;
 }
 
 /// Phases 6–7 of a member's step after [`check_member`] (or the report of one that slept or is
@@ -589,7 +626,7 @@ fn finish_member(
         let integrate_start = Instant::now();
         // 6. sleep
         if sleeps {
-            sleep::fall_asleep(body, ctx, &mut sc.to_sleep);
+            sleep::fall_asleep(body, ctx, &mut sc.rigid.to_sleep);
         }
         finish::energies(body, ctx);
         times.integrate += integrate_start.elapsed().as_secs_f64();
@@ -598,8 +635,8 @@ fn finish_member(
         body.last.report.substeps = 0;
         body.last.report.contacts = 0;
         body.last.report.frozen = body.activation.frozen;
-        sc.near.clear();
-        sc.touched_colliders.clear();
+        sc.broad.near.clear();
+        sc.touch.touched_colliders.clear();
     }
     body.last.report.detached = detached;
     body.last.report.attached_nodes = body.bindings.len();

@@ -45,14 +45,15 @@ pub(super) fn prepare<'a>(
     body.step.save(&body.state);
 
     // Bodies this deformable is bound to, and how every relevant body moves.
-    sc.motions.clear();
-    body.bindings.bodies(&mut sc.attached_bodies);
-    sc.attachment_motion.clear();
+    sc.broad.motions.clear();
+    body.bindings.bodies(&mut sc.broad.attached_bodies);
+    sc.bones.attachment_motion.clear();
     for a in body.bindings.list() {
-        let m = motion_of(&mut sc.motions, a.body, bodies, dt);
-        sc.attachment_motion.push(m);
+        let m = motion_of(&mut sc.broad.motions, a.body, bodies, dt);
+        sc.bones.attachment_motion.push(m);
     }
-    sc.teleported = super::teleport::carry_if_jumped(body, ctx, bodies, sc);
+    sc.bones.teleported =
+        super::teleport::carry_if_jumped(body, ctx, bodies, (&sc.bones, &mut sc.broad));
 
     // Broad phase, once per deformable and then once per surface node.
     let surface = body.rest.mesh.boundary_nodes();
@@ -104,35 +105,35 @@ pub(super) fn prepare<'a>(
         + 1e-4
         + turning;
     let extent = region.mins.abs().max(region.maxs.abs()).max_element();
-    sc.skin = contact::surface_skin(shortest, extent);
+    sc.broad.skin = contact::surface_skin(shortest, extent);
     let widen = node_margin + ctx.margin;
     let region = region.loosened(widen);
     let scan = ctx.scan(bodies, &body.contact);
-    contact::near_colliders(&scan, region, &sc.attached_bodies, &mut sc.near);
-    let mut candidates: Vec<Candidate<'a>> = Vec::with_capacity(sc.near.len());
-    for &h in &sc.near {
+    contact::near_colliders(&scan, region, &sc.broad.attached_bodies, &mut sc.broad.near);
+    let mut candidates: Vec<Candidate<'a>> = Vec::with_capacity(sc.broad.near.len());
+    for &h in &sc.broad.near {
         let Some(co) = ctx.colliders.get(h) else {
             continue;
         };
         let m = co
             .parent()
-            .and_then(|p| motion_of(&mut sc.motions, p, bodies, dt));
+            .and_then(|p| motion_of(&mut sc.broad.motions, p, bodies, dt));
         let spacing = 0.5 * shortest.max(1e-4);
         candidates.push(contact::candidate(
             &scan,
             h,
             co,
             m,
-            &sc.motions,
+            &sc.broad.motions,
             &region,
             spacing,
         ));
     }
-    sc.near.clear();
-    sc.near.extend(candidates.iter().map(|c| c.handle));
-    sc.touched_colliders.clear();
-    sc.touched_colliders.resize(candidates.len(), false);
-    sc.backup.save(&sc.motions, bodies);
+    sc.broad.near.clear();
+    sc.broad.near.extend(candidates.iter().map(|c| c.handle));
+    sc.touch.touched_colliders.clear();
+    sc.touch.touched_colliders.resize(candidates.len(), false);
+    sc.rigid.backup.save(&sc.broad.motions, bodies);
     tables(body, &scan, &candidates, widen, sc);
     body.last.contacts.clear();
     candidates
@@ -149,9 +150,9 @@ fn tables(
 ) {
     let (dt, g) = (scan.dt, scan.gravity * body.gravity_scale);
     let surface = body.rest.mesh.boundary_nodes();
-    sc.node_start.clear();
-    sc.node_cands.clear();
-    sc.node_start.push(0);
+    sc.broad.node_start.clear();
+    sc.broad.node_cands.clear();
+    sc.broad.node_start.push(0);
     for &i in surface {
         if !candidates.is_empty() && !body.is_attached(i) {
             let mut b = Aabb::new_invalid();
@@ -162,13 +163,18 @@ fn tables(
                 g,
                 dt,
             );
-            contact::node_candidates(scan, b.loosened(widen), candidates, &mut sc.node_cands);
+            contact::node_candidates(
+                scan,
+                b.loosened(widen),
+                candidates,
+                &mut sc.broad.node_cands,
+            );
         }
-        sc.node_start.push(sc.node_cands.len() as u32);
+        sc.broad.node_start.push(sc.broad.node_cands.len() as u32);
     }
-    sc.facet_start.clear();
-    sc.facet_cands.clear();
-    sc.facet_start.push(0);
+    sc.broad.facet_start.clear();
+    sc.broad.facet_cands.clear();
+    sc.broad.facet_start.push(0);
     let with_features = candidates.iter().any(|c| !c.features.is_empty());
     for f in body.rest.mesh.boundary_facets() {
         if with_features && !f.iter().all(|&i| body.is_attached(i)) {
@@ -182,21 +188,29 @@ fn tables(
                     dt,
                 );
             }
-            let begin = sc.facet_cands.len();
-            contact::node_candidates(scan, b.loosened(widen), candidates, &mut sc.facet_cands);
+            let begin = sc.broad.facet_cands.len();
+            contact::node_candidates(
+                scan,
+                b.loosened(widen),
+                candidates,
+                &mut sc.broad.facet_cands,
+            );
             let mut k = begin;
-            while k < sc.facet_cands.len() {
-                if candidates[sc.facet_cands[k] as usize].features.is_empty() {
-                    sc.facet_cands.swap_remove(k);
+            while k < sc.broad.facet_cands.len() {
+                if candidates[sc.broad.facet_cands[k] as usize]
+                    .features
+                    .is_empty()
+                {
+                    sc.broad.facet_cands.swap_remove(k);
                 } else {
                     k += 1;
                 }
             }
         }
-        sc.facet_start.push(sc.facet_cands.len() as u32);
+        sc.broad.facet_start.push(sc.broad.facet_cands.len() as u32);
     }
-    sc.touched_nodes.clear();
-    sc.touched_nodes.resize(surface.len(), false);
-    sc.last_contact.clear();
-    sc.last_contact.resize(surface.len(), None);
+    sc.touch.touched_nodes.clear();
+    sc.touch.touched_nodes.resize(surface.len(), false);
+    sc.touch.last_contact.clear();
+    sc.touch.last_contact.resize(surface.len(), None);
 }

@@ -12,7 +12,7 @@ use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::rapier::geometry::{Aabb, BoundingVolume};
 use super::super::set::DeformableHandle;
 use super::substep::Member;
-use super::{Scratch, StepContext};
+use super::{Broad, RigidHold, StepContext};
 
 /// Wakes a sleeping body that something disturbs (or that may no longer sleep); returns
 /// whether it is still asleep.
@@ -20,9 +20,10 @@ pub(super) fn stays_asleep(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
     bodies: &RigidBodySet,
-    sc: &mut Scratch,
+    broad: &mut Broad,
 ) -> bool {
-    if body.activation.sleeping && (!body.activation.can_sleep || disturbed(body, ctx, bodies, sc))
+    if body.activation.sleeping
+        && (!body.activation.can_sleep || disturbed(body, ctx, bodies, broad))
     {
         body.wake_up();
     }
@@ -77,13 +78,13 @@ pub(super) fn wake_held_bodies(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
-    sc: &mut Scratch,
+    rigid: &mut RigidHold,
 ) {
     if !std::mem::take(&mut body.activation.woken) {
         return;
     }
-    held_bodies(body, ctx, &mut sc.held);
-    for h in &sc.held {
+    held_bodies(body, ctx, &mut rigid.held);
+    for h in &rigid.held {
         if let Some(rb) = bodies.get_mut(*h).filter(|b| b.is_dynamic()) {
             rb.wake_up(true);
         }
@@ -110,10 +111,10 @@ fn disturbed(
     body: &Deformable,
     ctx: &StepContext<'_>,
     bodies: &RigidBodySet,
-    sc: &mut Scratch,
+    broad: &mut Broad,
 ) -> bool {
-    body.bindings.bodies(&mut sc.attached_bodies);
-    if sc
+    body.bindings.bodies(&mut broad.attached_bodies);
+    if broad
         .attached_bodies
         .iter()
         .any(|h| bodies.get(*h).is_none_or(is_moving))
@@ -137,17 +138,17 @@ fn disturbed(
     contact::near_colliders(
         &scan,
         region.loosened(ctx.margin + 1e-2 * size),
-        &sc.attached_bodies,
-        &mut sc.near,
+        &broad.attached_bodies,
+        &mut broad.near,
     );
-    let woken = sc.near.iter().any(|h| {
+    let woken = broad.near.iter().any(|h| {
         ctx.colliders
             .get(*h)
             .and_then(|c| c.parent())
             .and_then(|p| bodies.get(p))
             .is_some_and(is_moving)
     });
-    sc.near.clear();
+    broad.near.clear();
     woken
 }
 
@@ -159,11 +160,11 @@ pub(super) fn update(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
     bodies: &RigidBodySet,
-    sc: &Scratch,
+    broad: &Broad,
     sane: bool,
 ) -> bool {
     // A dynamic body it holds may be awake: resting on the deformable, it sleeps with it.
-    let quiet = sc.motions.iter().all(|m| {
+    let quiet = broad.motions.iter().all(|m| {
         bodies
             .get(m.handle)
             .is_some_and(|b| !is_restless(b, ctx.gravity, ctx.dt))

@@ -11,7 +11,7 @@ use super::super::math::{Real, Vector, FACET_ARITY};
 use super::super::mesh::Mesh;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::set::DeformableHandle;
-use super::{timed, Candidates, Scratch, StageTimes, StepContext};
+use super::{timed, Broad, Candidates, Scratch, StageTimes, StepContext, Touch};
 
 /// Most feature crossings resolved per surface facet and substep.
 const FACET_PASSES: usize = 8;
@@ -102,7 +102,7 @@ pub(super) fn run(
     // The motions are read all through the loop while the other buffers change.
     let motions: Vec<Vec<BodyMotion>> = members
         .iter_mut()
-        .map(|m| std::mem::take(&mut m.sc.motions))
+        .map(|m| std::mem::take(&mut m.sc.broad.motions))
         .collect();
     let mut t = 0.0;
     let mut substeps = 0;
@@ -110,7 +110,7 @@ pub(super) fn run(
         for j in 0..live.len() {
             let i = live[order(substeps % 2 == 1, live.len(), j)];
             let m = &mut members[i];
-            let at = substep_at(ctx, m.sc.skin, h, t, &motions[i]);
+            let at = substep_at(ctx, m.sc.broad.skin, h, t, &motions[i]);
             advance(integrator, m, ctx, &at, bodies);
         }
         rigid_passes(
@@ -133,7 +133,11 @@ pub(super) fn run(
             for (x, v) in body.state.positions.iter_mut().zip(&body.state.velocities) {
                 *x += *v * h;
             }
-            attach::place_on_bones(&body.bindings, &m.sc.targets, &mut body.state.positions);
+            attach::place_on_bones(
+                &body.bindings,
+                &m.sc.bones.targets,
+                &mut body.state.positions,
+            );
             body.step.forces_valid = false;
             m.stats.substeps += 1;
         }
@@ -141,7 +145,7 @@ pub(super) fn run(
         substeps += 1;
     }
     for (m, motions) in members.iter_mut().zip(motions) {
-        m.sc.motions = motions;
+        m.sc.broad.motions = motions;
     }
 }
 
@@ -206,7 +210,7 @@ fn rigid_passes(
                 .enumerate()
                 .filter(|(i, m)| m.live && !picked[*i].is_empty())
                 .map(|(i, m)| contact::block::BlockSide {
-                    at: substep_at(ctx, m.sc.skin, h, t, &motions[i]),
+                    at: substep_at(ctx, m.sc.broad.skin, h, t, &motions[i]),
                     rows: &mut m.rigid_rows,
                     picked: &picked[i],
                     velocities: &mut m.body.state.velocities,
@@ -306,11 +310,11 @@ fn advance(
     };
     attach::drive_bones(
         &body.bindings,
-        &sc.attachment_motion,
+        &sc.bones.attachment_motion,
         nodes,
         at,
         bodies,
-        &mut sc.targets,
+        &mut sc.bones.targets,
     );
 
     // Contacts, on velocities, before positions move.
@@ -327,15 +331,26 @@ fn advance(
             // Sequential impulses in one fixed order are lopsided (a box landing flat on a
             // soft cube was kicked sideways and kept swaying): the sweeps alternate.
             let backward = stats.substeps % 2 == 1;
-            node_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
-            stats.facet_contacts +=
-                facet_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
+            node_contacts(
+                body,
+                (at, backward, split),
+                bodies,
+                (&sc.broad, &mut sc.touch),
+                (candidates, rows),
+            );
+            stats.facet_contacts += facet_contacts(
+                body,
+                (at, backward, split),
+                bodies,
+                (&sc.broad, &mut sc.touch),
+                (candidates, rows),
+            );
         });
         // An implicit integrator lets the rest of the body answer the contacts within the
         // step, then the contacts see the result.
         if let Some(before) = before {
             let mut lift = vec![None; before.len()];
-            for c in sc.last_contact.iter().flatten() {
+            for c in sc.touch.last_contact.iter().flatten() {
                 if let Some(i) = c.node {
                     lift[i as usize] = Some((c.point, c.normal));
                 }
@@ -352,13 +367,24 @@ fn advance(
                     set: &set,
                     reactions: &reactions,
                 };
-                given.pass_on(body, at, sc, candidates, bodies);
+                given.pass_on(body, at, &sc.touch, candidates, bodies);
                 timed(&mut m.times.contacts, || {
                     let backward = stats.substeps % 2 == 1;
                     rows.clear();
-                    node_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
-                    stats.facet_contacts +=
-                        facet_contacts(body, (at, backward, split), bodies, sc, (candidates, rows));
+                    node_contacts(
+                        body,
+                        (at, backward, split),
+                        bodies,
+                        (&sc.broad, &mut sc.touch),
+                        (candidates, rows),
+                    );
+                    stats.facet_contacts += facet_contacts(
+                        body,
+                        (at, backward, split),
+                        bodies,
+                        (&sc.broad, &mut sc.touch),
+                        (candidates, rows),
+                    );
                 });
             }
         }
@@ -384,14 +410,14 @@ impl Given<'_> {
         &self,
         body: &Deformable,
         at: &Substep<'_>,
-        sc: &Scratch,
+        touch: &Touch,
         candidates: &Candidates<'_>,
         bodies: &mut RigidBodySet,
     ) {
         if self.reactions.is_empty() {
             return;
         }
-        for c in sc.last_contact.iter().flatten() {
+        for c in touch.last_contact.iter().flatten() {
             let Some(i) = c.node.map(|i| i as usize) else {
                 continue;
             };
@@ -426,14 +452,17 @@ fn node_contacts(
     body: &mut Deformable,
     (at, backward, split): (&Substep<'_>, bool, bool),
     bodies: &mut RigidBodySet,
-    sc: &mut Scratch,
+    (broad, touch): (&Broad, &mut Touch),
     (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
 ) {
     let surface = body.rest.mesh.boundary_nodes();
     for j in 0..surface.len() {
         let k = order(backward, surface.len(), j);
         let i = surface[k];
-        let (b0, b1) = (sc.node_start[k] as usize, sc.node_start[k + 1] as usize);
+        let (b0, b1) = (
+            broad.node_start[k] as usize,
+            broad.node_start[k + 1] as usize,
+        );
         if b0 == b1 {
             continue;
         }
@@ -445,9 +474,14 @@ fn node_contacts(
             v_before: body.step.scratch_velocities[n_i],
             inv_mass: body.rest.inv_masses[n_i],
         };
-        let Some(mut c) =
-            contact::resolve_node(node, &mut x, at, &sc.node_cands[b0..b1], candidates, bodies)
-        else {
+        let Some(mut c) = contact::resolve_node(
+            node,
+            &mut x,
+            at,
+            &broad.node_cands[b0..b1],
+            candidates,
+            bodies,
+        ) else {
             continue;
         };
         let start = body.state.positions[n_i];
@@ -482,10 +516,10 @@ fn node_contacts(
             c.defer_body();
         }
         let v = &mut body.state.velocities;
-        let point = c.settle(v, at, candidates, bodies, &mut sc.pushed, Some(i));
-        sc.touched_nodes[k] = true;
-        sc.last_contact[k] = Some(point);
-        sc.touched_colliders[c.candidate] = true;
+        let point = c.settle(v, at, candidates, bodies, &mut touch.pushed, Some(i));
+        touch.touched_nodes[k] = true;
+        touch.last_contact[k] = Some(point);
+        touch.touched_colliders[c.candidate] = true;
         if candidates[c.candidate].dynamic {
             rows.push(c);
         }
@@ -538,7 +572,7 @@ fn facet_contacts(
     body: &mut Deformable,
     (at, backward, split): (&Substep<'_>, bool, bool),
     bodies: &mut RigidBodySet,
-    sc: &mut Scratch,
+    (broad, touch): (&Broad, &mut Touch),
     (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
 ) -> usize {
     let facets = body.rest.mesh.boundary_facets();
@@ -547,7 +581,10 @@ fn facet_contacts(
     for j in 0..facets.len() {
         let f = order(backward, facets.len(), j);
         let facet = &facets[f];
-        let (b0, b1) = (sc.facet_start[f] as usize, sc.facet_start[f + 1] as usize);
+        let (b0, b1) = (
+            broad.facet_start[f] as usize,
+            broad.facet_start[f + 1] as usize,
+        );
         if b0 == b1 {
             continue;
         }
@@ -575,7 +612,7 @@ fn facet_contacts(
                 y,
                 inv_masses,
             };
-            let ids = &sc.facet_cands[b0..b1];
+            let ids = &broad.facet_cands[b0..b1];
             let Some(mut c) = contact::resolve_facet(&motion, at, ids, candidates, bodies) else {
                 break;
             };
@@ -583,9 +620,9 @@ fn facet_contacts(
                 c.defer_body();
             }
             let v = &mut body.state.velocities;
-            let point = c.settle(v, at, candidates, bodies, &mut sc.pushed, None);
+            let point = c.settle(v, at, candidates, bodies, &mut touch.pushed, None);
             body.last.contacts.push(point);
-            sc.touched_colliders[c.candidate] = true;
+            touch.touched_colliders[c.candidate] = true;
             if candidates[c.candidate].dynamic {
                 rows.push(c);
             }
@@ -608,13 +645,16 @@ fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: boo
         for j in 0..surface {
             let k = order(backward, surface, j);
             let m = &members[i];
-            let (b0, b1) = (m.sc.soft_start[k] as usize, m.sc.soft_start[k + 1] as usize);
+            let (b0, b1) = (
+                m.sc.soft.soft_start[k] as usize,
+                m.sc.soft.soft_start[k + 1] as usize,
+            );
             if b0 == b1 {
                 continue;
             }
             let node = m.body.rest.mesh.boundary_nodes()[k];
-            let cands = &m.sc.soft_cands[b0..b1];
-            let body_of = |j: usize| (&*members[j].body, &members[j].sc.soft_surface);
+            let cands = &m.sc.soft.soft_cands[b0..b1];
+            let body_of = |j: usize| (&*members[j].body, &members[j].sc.soft.soft_surface);
             soft::find(body_of, i, node, cands, at, (&mut hits, &mut exits));
             // A still member's nodes meet only live members' facets.
             let still = !members[i].live;

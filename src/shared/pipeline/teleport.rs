@@ -12,14 +12,14 @@ use super::super::body::Deformable;
 use super::super::coupling::MotionKind;
 use super::super::math::{self, Matrix, Real, Rotation, Vector, DIM};
 use super::super::rapier::dynamics::RigidBodySet;
-use super::{Scratch, StepContext};
+use super::{BoneDrive, Broad, StepContext};
 
 /// Carries `body` with its bones if they jumped (see the module docs); returns whether it did.
 pub(super) fn carry_if_jumped(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
     bodies: &RigidBodySet,
-    sc: &mut Scratch,
+    (bones, broad): (&BoneDrive, &mut Broad),
 ) -> bool {
     let dt = ctx.dt;
     let reach = ctx.settings.teleport_speed * dt;
@@ -31,13 +31,13 @@ pub(super) fn carry_if_jumped(
     let x = &body.state.positions;
     let mut pairs: Vec<(Vector, Vector)> = Vec::new();
     for (k, a) in body.bindings.list().iter().enumerate() {
-        let Some(m) = sc.attachment_motion[k] else {
+        let Some(m) = bones.attachment_motion[k] else {
             continue;
         };
-        if sc.motions[m].kind == MotionKind::Dynamic {
+        if broad.motions[m].kind == MotionKind::Dynamic {
             continue;
         }
-        let end = sc.motions[m]
+        let end = broad.motions[m]
             .pose_at(1.0, dt, bodies)
             .transform_point(a.anchor);
         pairs.push((x[a.node as usize], end));
@@ -67,8 +67,8 @@ pub(super) fn carry_if_jumped(
     let _ = state.elements.set_warm_start(&turned);
     body.step.forces_valid = false;
     // The bound nodes stay on their bones where the bones end: no drag back along the jump.
-    for m in sc.attachment_motion.iter().flatten() {
-        let motion = &mut sc.motions[*m];
+    for m in bones.attachment_motion.iter().flatten() {
+        let motion = &mut broad.motions[*m];
         if motion.kind != MotionKind::Dynamic {
             motion.pose0 = motion.pose1;
         }
