@@ -37,6 +37,8 @@ pub(crate) struct BlockSide<'s, 'c> {
     pub velocities: &'s mut [Vector],
     pub candidates: &'s mut [Candidate<'c>],
     pub at: Substep<'s>,
+    /// The dynamic bodies its contacts pushed this step (the body is added if its rows push it).
+    pub pushed: &'s mut Vec<RigidBodyHandle>,
 }
 
 /// A row as the solve sees it.
@@ -257,6 +259,9 @@ fn write_back(
         let at = &side.at;
         let cand = &side.candidates[c.candidate];
         cand.apply_impulse(r.body_old - p, c.anchor(), at.motions, bodies, at.dt);
+        if pn > 0.0 && !side.pushed.contains(&body) {
+            side.pushed.push(body);
+        }
     }
     for side in sides.iter_mut() {
         let at = &side.at;

@@ -56,7 +56,10 @@ impl Contact {
     ) -> ContactPoint {
         self.solve(velocities, at, candidates, bodies);
         refresh_poses(candidates, self.candidate, at.s1, at.dt, at.motions, bodies);
-        self.note_pushed(candidates, at.motions, pushed);
+        // A deferred contact's body is noted by its block solve, which decides its push.
+        if !self.deferred {
+            self.note_pushed(candidates, at.motions, pushed);
+        }
         ContactPoint {
             point: self.point,
             normal: self.normal,

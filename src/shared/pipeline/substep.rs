@@ -215,6 +215,7 @@ fn rigid_passes(
                     picked: &picked[i],
                     velocities: &mut m.body.state.velocities,
                     candidates: &mut m.candidates,
+                    pushed: &mut m.sc.touch.pushed,
                 })
                 .collect();
             contact::block::solve(&mut sides, body, bodies);
@@ -291,10 +292,15 @@ fn advance(
     bodies: &mut RigidBodySet,
 ) {
     let g = ctx.gravity * m.body.gravity_scale;
-    let split = !m.shares_bodies;
     let body = &mut *m.body;
     let sc = &mut *m.sc;
     let answers = integrator.answers_contacts(body);
+    // An implicit step's second contact pass clears the first's rows: their impulses must
+    // reach the body at once.
+    let sharing = Sharing {
+        split: !m.shares_bodies,
+        defer: m.shares_bodies && !answers,
+    };
     // Velocities first (the contacts act on them), from the element forces and gravity.
     body.step
         .scratch_velocities
@@ -333,14 +339,14 @@ fn advance(
             let backward = stats.substeps % 2 == 1;
             node_contacts(
                 body,
-                (at, backward, split),
+                (at, backward, sharing),
                 bodies,
                 (&sc.broad, &mut sc.touch),
                 (candidates, rows),
             );
             stats.facet_contacts += facet_contacts(
                 body,
-                (at, backward, split),
+                (at, backward, sharing),
                 bodies,
                 (&sc.broad, &mut sc.touch),
                 (candidates, rows),
@@ -373,14 +379,14 @@ fn advance(
                     rows.clear();
                     node_contacts(
                         body,
-                        (at, backward, split),
+                        (at, backward, sharing),
                         bodies,
                         (&sc.broad, &mut sc.touch),
                         (candidates, rows),
                     );
                     stats.facet_contacts += facet_contacts(
                         body,
-                        (at, backward, split),
+                        (at, backward, sharing),
                         bodies,
                         (&sc.broad, &mut sc.touch),
                         (candidates, rows),
@@ -446,11 +452,20 @@ fn order(backward: bool, len: usize, j: usize) -> usize {
     }
 }
 
-/// Every free surface node against its candidates; each contact found is solved at once. With
-/// `split`, a dynamic body found over a node is moved out by its share.
+/// How a member meets the dynamic bodies it pushes.
+#[derive(Copy, Clone, Debug)]
+struct Sharing {
+    /// A body found over a node goes back out by its share: no other deformable may push it
+    /// (a box pinched between two pads would be moved into the other pad).
+    split: bool,
+    /// The body takes the contacts' impulses in its block solve ([`rigid_passes`]), not at once.
+    defer: bool,
+}
+
+/// Every free surface node against its candidates; each contact found is solved at once.
 fn node_contacts(
     body: &mut Deformable,
-    (at, backward, split): (&Substep<'_>, bool, bool),
+    (at, backward, sharing): (&Substep<'_>, bool, Sharing),
     bodies: &mut RigidBodySet,
     (broad, touch): (&Broad, &mut Touch),
     (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
@@ -491,7 +506,7 @@ fn node_contacts(
             // another deformable may push (a box pinched between two pads would be moved
             // into the other pad).
             let cand = &candidates[c.candidate];
-            if split && cand.dynamic {
+            if sharing.split && cand.dynamic {
                 let w_body = cand.inv_mass_at(c.anchor(), c.normal, at.motions, bodies);
                 let share = w_body / (w_body + node.inv_mass);
                 if share > 0.0 && share.is_finite() {
@@ -512,7 +527,7 @@ fn node_contacts(
             x = keep_cells_upright(rest, &mut body.state.positions, k, (start, x));
         }
         body.state.positions[n_i] = x;
-        if !split && candidates[c.candidate].dynamic {
+        if sharing.defer && candidates[c.candidate].dynamic {
             c.defer_body();
         }
         let v = &mut body.state.velocities;
@@ -570,7 +585,7 @@ fn keep_cells_upright(
 /// first; returns how many contacts were solved.
 fn facet_contacts(
     body: &mut Deformable,
-    (at, backward, split): (&Substep<'_>, bool, bool),
+    (at, backward, sharing): (&Substep<'_>, bool, Sharing),
     bodies: &mut RigidBodySet,
     (broad, touch): (&Broad, &mut Touch),
     (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
@@ -616,7 +631,7 @@ fn facet_contacts(
             let Some(mut c) = contact::resolve_facet(&motion, at, ids, candidates, bodies) else {
                 break;
             };
-            if !split && candidates[c.candidate].dynamic {
+            if sharing.defer && candidates[c.candidate].dynamic {
                 c.defer_body();
             }
             let v = &mut body.state.velocities;
