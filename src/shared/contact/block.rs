@@ -67,8 +67,16 @@ enum Slope {
     None,
     /// Sticking: the whole relative velocity is taken, `dP = dv / own`.
     Stick(Real),
-    /// Pushing (sliding, or without friction): `dP = a (b · dv)`.
+    /// Pushing without friction: `dP = a (b · dv)`.
     Push(Vector, Vector),
+    /// Sliding along slip direction `t` off normal `n`: `dP = a (n · dv)` plus the turn of the
+    /// friction with the slip, `c (dv − t (t · dv) − n (n · dv))` (zero in 2D).
+    Slide {
+        a: Vector,
+        n: Vector,
+        t: Vector,
+        c: Real,
+    },
 }
 
 impl Row {
@@ -91,9 +99,11 @@ impl Row {
         if stick.length() <= limit {
             return (n * pn + stick, Slope::Stick(scale));
         }
-        let t = slip / slip.length();
+        let length = slip.length();
+        let t = slip / length;
         let a = (n - t * self.friction) * scale;
-        (n * pn - t * limit, Slope::Push(a, n))
+        let c = limit / length;
+        (n * pn - t * limit, Slope::Slide { a, n, t, c })
     }
 
     /// The body's velocity at the row's anchor.
@@ -184,6 +194,9 @@ fn evaluate(
                 Slope::None => Vector::ZERO,
                 Slope::Stick(s) => dv * s,
                 Slope::Push(a, b) => a * b.dot(dv),
+                Slope::Slide { a, n, t, c } => {
+                    a * n.dot(dv) + (dv - t * t.dot(dv) - n * n.dot(dv)) * c
+                }
             };
             add(col, response(r, dp));
         }
