@@ -74,14 +74,8 @@ fn a_soft_ball_rolls_into_a_wall_of_boxes_creating_no_energy_in_2d() {
                 box_mass,
                 ..Default::default()
             };
-            let r = scene.run().unwrap();
             let name = format!("{} against {box_mass} kg boxes", model.name());
-            assert!(!r.failed, "{name}: {:?}", r.failure);
-            assert_eq!(r.final_inverted_elements, 0, "{name}");
-            let over = r.energy_over_start.unwrap();
-            assert!(over <= 1e-3, "{name}: energy rose {over} above its start");
-            let knocked = r.scatter.unwrap();
-            assert!(knocked > 0.5, "{name}: the farthest box moved {knocked} m");
+            assert_rolled_through(&scene, &name);
         }
     }
 }
@@ -100,13 +94,18 @@ fn a_soft_ball_rolls_into_a_wall_of_boxes_creating_no_energy_in_3d() {
             box_mass: 0.2,
             ..Default::default()
         };
-        let r = scene.run().unwrap();
-        let name = model.name();
-        assert!(!r.failed, "{name}: {:?}", r.failure);
-        assert_eq!(r.final_inverted_elements, 0, "{name}");
-        let over = r.energy_over_start.unwrap();
-        assert!(over <= 1e-3, "{name}: energy rose {over} above its start");
-        let knocked = r.scatter.unwrap();
-        assert!(knocked > 0.5, "{name}: the farthest box moved {knocked} m");
+        assert_rolled_through(&scene, model.name());
     }
+}
+
+/// Runs the roll: it must not fail, end with an inverted cell or more energy than it started
+/// with, and must knock the wall over.
+fn assert_rolled_through(scene: &RollScene, name: &str) {
+    let r = scene.run().unwrap();
+    assert!(!r.failed, "{name}: {:?}", r.failure);
+    assert_eq!(r.final_inverted_elements, 0, "{name}");
+    let over = r.energy_over_start.unwrap();
+    assert!(over <= 1e-3, "{name}: energy rose {over} above its start");
+    let knocked = r.scatter.unwrap();
+    assert!(knocked > 0.5, "{name}: the farthest box moved {knocked} m");
 }

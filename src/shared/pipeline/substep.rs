@@ -337,18 +337,11 @@ fn advance(
             // Sequential impulses in one fixed order are lopsided (a box landing flat on a
             // soft cube was kicked sideways and kept swaying): the sweeps alternate.
             let backward = stats.substeps % 2 == 1;
-            node_contacts(
+            stats.facet_contacts += sweep_contacts(
                 body,
                 (at, backward, sharing),
                 bodies,
-                (&sc.broad, &mut sc.touch),
-                (candidates, rows),
-            );
-            stats.facet_contacts += facet_contacts(
-                body,
-                (at, backward, sharing),
-                bodies,
-                (&sc.broad, &mut sc.touch),
+                sc,
                 (candidates, rows),
             );
         });
@@ -377,20 +370,9 @@ fn advance(
                 timed(&mut m.times.contacts, || {
                     let backward = stats.substeps % 2 == 1;
                     rows.clear();
-                    node_contacts(
-                        body,
-                        (at, backward, sharing),
-                        bodies,
-                        (&sc.broad, &mut sc.touch),
-                        (candidates, rows),
-                    );
-                    stats.facet_contacts += facet_contacts(
-                        body,
-                        (at, backward, sharing),
-                        bodies,
-                        (&sc.broad, &mut sc.touch),
-                        (candidates, rows),
-                    );
+                    let sweep = (at, backward, sharing);
+                    stats.facet_contacts +=
+                        sweep_contacts(body, sweep, bodies, sc, (candidates, rows));
                 });
             }
         }
@@ -450,6 +432,31 @@ fn order(backward: bool, len: usize, j: usize) -> usize {
     } else {
         j
     }
+}
+
+/// The node contacts, then the facet contacts, of one sweep; returns how many facet contacts
+/// were solved.
+fn sweep_contacts(
+    body: &mut Deformable,
+    sweep: (&Substep<'_>, bool, Sharing),
+    bodies: &mut RigidBodySet,
+    sc: &mut Scratch,
+    (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
+) -> usize {
+    node_contacts(
+        body,
+        sweep,
+        bodies,
+        (&sc.broad, &mut sc.touch),
+        (candidates, rows),
+    );
+    facet_contacts(
+        body,
+        sweep,
+        bodies,
+        (&sc.broad, &mut sc.touch),
+        (candidates, rows),
+    )
 }
 
 /// How a member meets the dynamic bodies it pushes.
