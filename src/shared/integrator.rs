@@ -9,8 +9,10 @@
 //! implements [`Integrate`] and the loop, the contacts and the attachments stay as they are.
 
 use super::body::Deformable;
-use super::math::{Real, Vector};
-use super::model::{self, Hold, StepInput};
+use super::contact::soft_terms;
+use super::math::Rotation;
+use super::math::{Matrix, Real, Vector};
+use super::model::{self, Hold, Solve, StepInput};
 
 /// How long the next substep may be at the body's current state.
 #[derive(Copy, Clone, Debug)]
@@ -65,6 +67,19 @@ pub(crate) trait Integrate {
 
     /// Whether [`Integrate::after_contacts`] does anything for `body`.
     fn answers_contacts(&self, _body: &Deformable) -> bool {
+        false
+    }
+
+    /// Solves an island's members together with the contact `terms` between them, in place
+    /// of [`Integrate::after_contacts`] (their velocities advanced and their collider contacts
+    /// solved once); returns whether it did. Explicit integrators leave such contacts to the
+    /// velocities after their step.
+    fn solve_together(
+        &self,
+        _members: &mut [Together<'_>],
+        _terms: &mut soft_terms::Terms,
+        _h: Real,
+    ) -> bool {
         false
     }
 }
@@ -174,6 +189,15 @@ impl Integrate for Integrator {
         self.implicit_for(body).is_some()
     }
 
+    fn solve_together(
+        &self,
+        members: &mut [Together<'_>],
+        terms: &mut soft_terms::Terms,
+        h: Real,
+    ) -> bool {
+        self.implicit_together(members, terms, h)
+    }
+
     /// The implicit step evaluates its own terms.
     fn uses_forces(&self, body: &Deformable) -> bool {
         self.implicit_for(body).is_none()
@@ -205,6 +229,183 @@ impl Integrate for Integrator {
             implicit_pass(body, g, h, iterations - 1, &held, true, reactions);
         }
         true
+    }
+}
+
+/// A member of an island the implicit step solves with its contacts between deformables
+/// ([`Integrator::solve_together`]).
+pub(crate) struct Together<'a> {
+    pub body: &'a mut Deformable,
+    /// Simulated this step; a still member's nodes stay put.
+    pub live: bool,
+    pub g: Vector,
+    /// The velocities before the collider contacts, and where those left each node.
+    pub before: Vec<Vector>,
+    pub lift: Vec<Option<(Vector, Vector)>>,
+    /// Out: the force each held node's hold exerted on it over the step.
+    pub reactions: Vec<Vector>,
+}
+
+/// Fewest sweeps of an island solved with its contact terms: with two, a cube dropped on
+/// another (`StackScene`) ended 51 mm inside it in 3D; with four, 0.2 mm.
+const MIN_TOGETHER_SWEEPS: usize = 4;
+
+impl Integrator {
+    /// [`Integrate::solve_together`] for the implicit step: an island whose members may touch
+    /// each other (or themselves):
+    /// after each member's first sweep and its collider contacts, the members' sweeps run in
+    /// turn, each node's Newton step taking in the contact `terms` it is part of
+    /// ([`soft_terms`]), then the terms' dual update; the velocities are the result. Returns
+    /// `false` (and does nothing) unless every live member takes the implicit step.
+    fn implicit_together(
+        &self,
+        members: &mut [Together<'_>],
+        terms: &mut soft_terms::Terms,
+        h: Real,
+    ) -> bool {
+        let mut iterations = 0;
+        for m in members.iter().filter(|m| m.live) {
+            match self.implicit_for(m.body) {
+                Some(k) => iterations = k,
+                None => return false,
+            }
+        }
+        let iterations = iterations.max(MIN_TOGETHER_SWEEPS);
+        let nodes: Vec<usize> = members.iter().map(|m| m.body.num_nodes()).collect();
+        terms.index(&nodes);
+        let holds: Vec<Vec<Hold>> = members
+            .iter()
+            .map(|m| {
+                let at = AfterContacts {
+                    before: &m.before,
+                    lift: &m.lift,
+                };
+                held_nodes(m.body, h, Some(at))
+            })
+            .collect();
+        // A member no collider stopped goes on from where its first sweep went; one that was
+        // stopped starts afresh (as [`Integrate::after_contacts`] does).
+        let starts: Vec<Option<Vec<Vector>>> = members
+            .iter()
+            .zip(&holds)
+            .map(|(m, held)| {
+                let body = &*m.body;
+                let stopped = held
+                    .iter()
+                    .enumerate()
+                    .any(|(i, x)| *x != Hold::Free && !body.is_attached(i as u32));
+                (!stopped).then(|| {
+                    let x0 = &body.state.positions;
+                    x0.iter()
+                        .zip(&body.state.velocities)
+                        .map(|(x, v)| *x + *v * h)
+                        .collect()
+                })
+            })
+            .collect();
+        let mut xs: Vec<Vec<Vector>> = members
+            .iter()
+            .map(|m| m.body.state.positions.clone())
+            .collect();
+        let mut reactions: Vec<Vec<Vector>> = vec![Vec::new(); members.len()];
+        let rotations: Vec<Option<Vec<Rotation>>> = {
+            let solves: Vec<Option<Solve<'_>>> = members
+                .iter()
+                .zip(&holds)
+                .zip(&starts)
+                .zip(xs.iter_mut())
+                .map(|(((m, held), start), x)| {
+                    if !m.live {
+                        return None;
+                    }
+                    let body = &*m.body;
+                    let input = StepInput {
+                        x0: &body.state.positions,
+                        v0: &body.step.scratch_velocities,
+                        masses: &body.rest.masses,
+                        held,
+                        start: start.as_deref(),
+                        gravity: m.g,
+                        h,
+                        iterations,
+                    };
+                    body.state.elements.begin_implicit(&input, x)
+                })
+                .collect();
+            for sweep in 0..iterations {
+                let backward = sweep % 2 == 1;
+                for j in 0..members.len() {
+                    let k = if backward { members.len() - 1 - j } else { j };
+                    let Some(solve) = &solves[k] else {
+                        continue;
+                    };
+                    let mut x = std::mem::take(&mut xs[k]);
+                    let plain = terms.none_for(k);
+                    solve.sweep(&mut x, backward, |i, own, f, block| {
+                        if !plain {
+                            terms.add((k, i), own, &xs, f, block);
+                        }
+                    });
+                    xs[k] = x;
+                }
+                move_as_wholes(&solves, terms, &mut xs);
+                terms.update(&xs);
+            }
+            solves
+                .into_iter()
+                .zip(xs.iter_mut())
+                .zip(reactions.iter_mut())
+                .enumerate()
+                .map(|(k, ((solve, x), reactions))| {
+                    // A member that touches no other moves freely as a whole.
+                    solve.and_then(|s| s.finish(x, reactions, terms.none_for(k)))
+                })
+                .collect()
+        };
+        for (((m, x), rotations), (held, r)) in members
+            .iter_mut()
+            .zip(&xs)
+            .zip(rotations)
+            .zip(holds.iter().zip(reactions))
+        {
+            if !m.live {
+                continue;
+            }
+            let body = &mut *m.body;
+            body.state.elements.keep_rotations(rotations);
+            let x0 = &body.state.positions;
+            for (i, v) in body.state.velocities.iter_mut().enumerate() {
+                if !matches!(held[i], Hold::At(_)) {
+                    *v = (x[i] - x0[i]) / h;
+                }
+            }
+            m.reactions = r;
+        }
+        true
+    }
+}
+
+/// The Newton steps of the translation of each member that no collider or bone holds and
+/// that takes part in a contact term ([`soft_terms`]: what a node's step cannot do alone).
+fn move_as_wholes(solves: &[Option<Solve<'_>>], terms: &soft_terms::Terms, xs: &mut [Vec<Vector>]) {
+    for (k, solve) in solves.iter().enumerate() {
+        let Some(solve) = solve.as_ref().filter(|s| s.all_free()) else {
+            continue;
+        };
+        if terms.none_for(k) {
+            continue;
+        }
+        // Two steps: the first may cross where a term starts or stops pushing.
+        for _ in 0..2 {
+            let (mut f, inertia) = solve.inertia_as_a_whole(&xs[k]);
+            let mut block = Matrix::IDENTITY * inertia;
+            terms.add_translation(k, xs, &mut f, &mut block);
+            let shift = block.inverse() * f;
+            if !shift.is_finite() {
+                break;
+            }
+            xs[k].iter_mut().for_each(|p| *p += shift);
+        }
     }
 }
 

@@ -49,24 +49,39 @@ fn a_tower_built_at_rest_stands_gains_no_energy_and_sleeps() {
 }
 
 #[test]
-fn the_tower_runs_under_the_implicit_setting_too() {
-    // Soft contact still steps the group explicitly under the implicit setting: the same run.
-    let run = |integrator| {
-        TowerScene {
-            bodies: 3,
-            seconds: 1.0,
-            integrator,
-            ..tower(ElementModel::EdgeRepulsion)
+fn the_tower_stands_under_the_implicit_step_solved_together() {
+    // Under the implicit setting the tower is one island solved with its contacts as terms of
+    // the step (it fell back to the explicit step's 52 substeps a step): built at rest or
+    // dropped from 10 cm gaps, it stands, creates no energy and sleeps. Before the bodies
+    // also moved as wholes in the sweeps, two cubes built at rest ended 0.6 m apart.
+    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
+        for gap in [0.0, 0.1] {
+            let scene = TowerScene {
+                gap,
+                integrator: Integrator::Implicit { iterations: 10 },
+                ..tower(model)
+            };
+            let r = scene.run().unwrap();
+            let name = format!("{} gap {gap}", model.name());
+            assert!(!r.failed, "{name}: {:?}", r.failure);
+            assert!(r.substeps <= 2.0, "{name}: {} substeps a step", r.substeps);
+            let over = r.energy_over_start.unwrap();
+            assert!(over <= 1e-3, "{name}: energy rose {over} above its start");
+            let top = r.top_height_ratio.unwrap();
+            assert!(top >= 0.9, "{name}: the top ended at {top} of its height");
+            // Dropped, a cube lands 3 cm off the one below and slides: 53 mm in 2D with shape
+            // matching (64 mm explicitly at 1 ms; rapier's corotational tower falls).
+            let bound = if gap > 0.0 { 0.06 } else { 0.05 };
+            let scatter = r.scatter.unwrap();
+            assert!(
+                scatter <= bound,
+                "{name}: a cube ended {scatter} m off the axis"
+            );
+            let inside = r.rest_interpenetration.unwrap() as Real;
+            assert!(inside < 0.01 * scene.size, "{name}: {inside} m inside");
+            assert_eq!(r.asleep, Some(true), "{name}: not asleep at the end");
         }
-        .run()
-        .unwrap()
-    };
-    let (implicit, explicit) = (
-        run(Integrator::Implicit { iterations: 2 }),
-        run(Integrator::Explicit),
-    );
-    assert_eq!(implicit.substeps, explicit.substeps);
-    assert!(implicit.energy_over_start.unwrap() <= 1e-3);
+    }
 }
 
 #[test]

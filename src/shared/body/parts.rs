@@ -5,6 +5,7 @@
 use std::sync::OnceLock;
 
 use super::super::contact::soft::NearFacets;
+use super::super::contact::soft_terms::Memory;
 use super::super::contact::ContactPoint;
 use super::super::material::Resolved;
 use super::super::math::{Real, Vector};
@@ -83,6 +84,9 @@ pub(crate) struct StepBuffers {
     pub saved_velocities: Vec<Vector>,
     /// Velocities before the substep's contacts.
     pub scratch_velocities: Vec<Vector>,
+    /// What its nodes' contacts with deformables under the implicit step carried over from
+    /// the last step, by node and body.
+    pub soft_memory: Vec<Memory>,
 }
 
 impl StepBuffers {
@@ -94,6 +98,7 @@ impl StepBuffers {
             saved_positions: state.positions.clone(),
             saved_velocities: state.velocities.clone(),
             scratch_velocities: state.velocities.clone(),
+            soft_memory: Vec::new(),
         }
     }
 }

@@ -63,6 +63,7 @@ pub(crate) mod candidates;
 mod facet;
 mod node;
 pub(crate) mod soft;
+pub(crate) mod soft_terms;
 mod solve;
 
 pub(crate) use candidates::{

@@ -254,16 +254,16 @@ pub(crate) fn node_tables<'s>(
 pub(crate) struct SoftHit {
     /// The member whose facet it is.
     pub other: usize,
-    facet: [u32; FACET_ARITY],
-    weights: [Real; FACET_ARITY],
+    pub(super) facet: [u32; FACET_ARITY],
+    pub(super) weights: [Real; FACET_ARITY],
     /// Outward normal of the facet at the end of the substep.
-    normal: Vector,
+    pub(super) normal: Vector,
     /// Signed distance of the node from the facet's plane at the start (negative: behind).
     d0: Real,
     /// The facet's plane at the start: a point and the normal.
     plane: (Vector, Vector),
     /// The facet body's depth limit.
-    depth_limit: Real,
+    pub(super) depth_limit: Real,
 }
 
 impl SoftHit {
@@ -453,7 +453,7 @@ pub(crate) struct SoftRow {
 
 /// The contact coefficients of a pair: friction and restitution of `a` and `b` combined by
 /// rapier's rules.
-fn combined(a: &Deformable, b: &Deformable) -> (Real, Real) {
+pub(super) fn combined(a: &Deformable, b: &Deformable) -> (Real, Real) {
     let (a, b) = (&a.contact, &b.contact);
     let friction = CoefficientCombineRule::combine(
         a.friction,
@@ -622,7 +622,7 @@ fn hit_depth(x: Vector, hit: &SoftHit) -> Real {
 /// depth limit); returns its distance from the plane after, from where it is now: a contact
 /// solved before this one (the node's other facets, the facet's other nodes) may have moved it
 /// out already, and an old depth would throw it sideways.
-fn step_out(x: &mut Vector, hit: &SoftHit) -> Real {
+pub(super) fn step_out(x: &mut Vector, hit: &SoftHit) -> Real {
     let d = hit_depth(*x, hit);
     if d >= 0.0 {
         return d;

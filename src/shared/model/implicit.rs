@@ -296,6 +296,25 @@ impl ModelState {
         x: &mut Vec<Vector>,
         reactions: &mut Vec<Vector>,
     ) -> bool {
+        let Some(solve) = self.begin_implicit(input, x) else {
+            return false;
+        };
+        for sweep in 0..input.iterations {
+            solve.sweep(x, sweep % 2 == 1, |_, _, _, _| {});
+        }
+        let rotations = solve.finish(x, reactions, true);
+        self.keep_rotations(rotations);
+        true
+    }
+
+    /// Sets up one backward-Euler step (see the module docs), the sweeps' start into `x`;
+    /// `None` for a model without one. [`Solve::sweep`] then sweeps it as often as wanted and
+    /// [`Solve::finish`] ends it.
+    pub(crate) fn begin_implicit<'a>(
+        &'a self,
+        input: &StepInput<'a>,
+        x: &mut Vec<Vector>,
+    ) -> Option<Solve<'a>> {
         let n = input.x0.len();
         let ModelState {
             elements,
@@ -304,12 +323,9 @@ impl ModelState {
             ..
         } = self;
         let volume = volume.as_ref();
-        let Some(incidence) = incidence
+        let incidence = incidence
             .get_or_init(|| Incidence::of(elements, volume, n))
-            .as_ref()
-        else {
-            return false;
-        };
+            .as_ref()?;
         let (x0, v0, h) = (input.x0, input.v0, input.h);
         let y: Vec<Vector> = (0..n)
             .map(|i| {
@@ -338,7 +354,7 @@ impl ModelState {
             x0,
             h,
         };
-        match &mut *elements {
+        match elements {
             Elements::Springs(s) | Elements::NonlinearSprings(s) => vertex.springs = Some(s),
             Elements::EdgeRepulsion(e) => {
                 vertex.springs = Some(&e.edges);
@@ -359,44 +375,133 @@ impl ModelState {
                     };
                     start.fix(sm.cell_indices(), SIMPLEX_ARITY, upright, x, &mut held);
                 }
-                let rotations = sm.rotations_mut().to_vec();
+                // The rotations are fitted once, where the sweeps start (inertia carries a
+                // turning cell's fit on), and held: refitting before every sweep cost 1.8× as
+                // much for the same fall.
+                let mut rotations = sm.rotations().to_vec();
                 let start = shape_residuals(sm, x0, &rotations);
+                sm.refit(x, &mut rotations);
                 vertex.shape = Some(Shape {
                     cells: sm,
                     rotations,
                     start,
                 });
             }
-            Elements::CentroidSprings(_) => return false,
+            Elements::CentroidSprings(_) => return None,
         }
-        sweep(&mut vertex, input, &held, &y, x);
+        Some(Solve {
+            vertex,
+            held,
+            y,
+            masses: input.masses,
+            v0,
+            gravity: input.gravity,
+            h,
+        })
+    }
+
+    /// Keeps the rotations a finished step fitted (shape matching's warm start).
+    pub(crate) fn keep_rotations(&mut self, rotations: Option<Vec<Rotation>>) {
+        if let (Some(rotations), Elements::ShapeMatching(sm)) = (rotations, &mut self.elements) {
+            sm.rotations_mut().copy_from_slice(&rotations);
+        }
+    }
+}
+
+/// An implicit step under way ([`ModelState::begin_implicit`]).
+pub(crate) struct Solve<'a> {
+    vertex: Vertex<'a>,
+    held: Vec<Hold>,
+    /// Each node's inertial prediction (a held node's hold).
+    y: Vec<Vector>,
+    masses: &'a [Real],
+    v0: &'a [Vector],
+    gravity: Vector,
+    h: Real,
+}
+
+impl Solve<'_> {
+    /// One Gauss–Seidel sweep over the nodes (`backward`: last first; the sweeps alternate,
+    /// as one order only leans the body: a cube on a floor tipped towards its first nodes):
+    /// each free node's Newton step in turn, `extra(i, x, f, block)` adding terms other than
+    /// the body's own (contacts with other bodies) to its force and block.
+    pub fn sweep(
+        &self,
+        x: &mut [Vector],
+        backward: bool,
+        mut extra: impl FnMut(usize, &[Vector], &mut Vector, &mut Matrix),
+    ) {
+        let n = x.len();
+        let h = self.h;
+        for j in 0..n {
+            let i = if backward { n - 1 - j } else { j };
+            let hold = self.held[i];
+            if matches!(hold, Hold::At(_)) {
+                continue;
+            }
+            let inertia = self.masses[i] / (h * h);
+            let (mut f, mut block) = self.vertex.newton(i, x, inertia, self.y[i]);
+            extra(i, x, &mut f, &mut block);
+            let Some(inverse) = invert(block) else {
+                continue;
+            };
+            let step = hold.constrained_step(x[i], inverse, f);
+            x[i] = self.vertex.line_search(i, x, step, hold);
+        }
+    }
+
+    /// Whether no node is held (the body may move as a whole).
+    pub fn all_free(&self) -> bool {
+        self.held.iter().all(|h| *h == Hold::Free)
+    }
+
+    /// The body's inertial force at `x` for a translation of it as a whole, and its stiffness:
+    /// `Σ m_i/h² (y_i − x_i)` and `Σ m_i/h²` (its elastic energy does not change under one).
+    pub fn inertia_as_a_whole(&self, x: &[Vector]) -> (Vector, Real) {
+        let h2 = self.h * self.h;
+        let force = (0..x.len())
+            .map(|i| (self.y[i] - x[i]) * self.masses[i])
+            .sum::<Vector>()
+            / h2;
+        (force, self.masses.iter().sum::<Real>() / h2)
+    }
+
+    /// Ends the step at `x`: `reactions` gets, per node, the force its hold exerted on it
+    /// ([`ModelState::implicit_step`]); with `translate` and no node held, the body moves by
+    /// the best translation (see the module docs). Returns shape matching's rotations, for
+    /// [`ModelState::keep_rotations`].
+    pub fn finish(
+        self,
+        x: &mut [Vector],
+        reactions: &mut Vec<Vector>,
+        translate: bool,
+    ) -> Option<Vec<Rotation>> {
+        let n = x.len();
+        let (h, held, vertex) = (self.h, &self.held, &self.vertex);
         reactions.clear();
         reactions.extend((0..n).map(|i| {
             if held[i] == Hold::Free {
                 return Vector::ZERO;
             }
-            let inertia = input.masses[i] / (h * h);
-            let inertial = x0[i] + v0[i] * h + input.gravity * (h * h);
+            let inertia = self.masses[i] / (h * h);
+            let inertial = vertex.x0[i] + self.v0[i] * h + self.gravity * (h * h);
             -vertex.newton(i, x, inertia, inertial).0
         }));
-        if let Some(shape) = vertex.shape {
-            let rotations = shape.rotations;
-            if let Elements::ShapeMatching(sm) = elements {
-                sm.rotations_mut().copy_from_slice(&rotations);
-            }
-        }
-        if held.iter().all(|h| *h == Hold::Free) {
+        if translate && held.iter().all(|h| *h == Hold::Free) {
             // The energy does not change under a translation, so the best one is exact: the
             // centre of mass where inertia and gravity take it. A few sweeps cannot move a
             // body much stiffer than `m/h²` as a whole; this makes its free flight ballistic.
-            let masses = input.masses;
+            let masses = self.masses;
             let mass: Real = masses.iter().sum();
-            let shift = (0..n).map(|i| (y[i] - x[i]) * masses[i]).sum::<Vector>() / mass;
+            let shift = (0..n)
+                .map(|i| (self.y[i] - x[i]) * masses[i])
+                .sum::<Vector>()
+                / mass;
             if mass > 0.0 && shift.is_finite() {
                 x.iter_mut().for_each(|p| *p += shift);
             }
         }
-        true
+        self.vertex.shape.map(|s| s.rotations)
     }
 }
 
@@ -482,41 +587,6 @@ impl Start<'_> {
                     *x = *x0;
                 }
             }
-        }
-    }
-}
-
-/// The Gauss–Seidel sweeps: each free node's Newton step in turn. Shape-based cells fit their
-/// rotations once, where the sweeps start (inertia carries a turning cell's fit on), and hold
-/// them: refitting before every sweep cost 1.8× as much for the same fall.
-fn sweep(
-    vertex: &mut Vertex<'_>,
-    input: &StepInput<'_>,
-    held: &[Hold],
-    y: &[Vector],
-    x: &mut [Vector],
-) {
-    let h = input.h;
-    if let Some(shape) = &mut vertex.shape {
-        shape.cells.refit(x, &mut shape.rotations);
-    }
-    let n = x.len();
-    for sweep in 0..input.iterations {
-        for j in 0..n {
-            // Forward, then backward: one order only leans the body (a cube on a floor tipped
-            // towards its first nodes).
-            let i = if sweep % 2 == 0 { j } else { n - 1 - j };
-            let hold = held[i];
-            if matches!(hold, Hold::At(_)) {
-                continue;
-            }
-            let inertia = input.masses[i] / (h * h);
-            let (f, block) = vertex.newton(i, x, inertia, y[i]);
-            let Some(inverse) = invert(block) else {
-                continue;
-            };
-            let step = hold.constrained_step(x[i], inverse, f);
-            x[i] = vertex.line_search(i, x, step, hold);
         }
     }
 }

@@ -62,7 +62,7 @@ pub mod springs;
 mod tests;
 pub mod volume;
 
-pub(crate) use implicit::{Hold, StepInput};
+pub(crate) use implicit::{Hold, Solve, StepInput};
 
 use super::error::BuildError;
 use super::material::{Resolved, Stiffness};

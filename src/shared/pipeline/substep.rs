@@ -4,9 +4,10 @@
 use super::super::attach::{self, DrivenNodes};
 use super::super::body::Deformable;
 use super::super::contact::soft::{self, NearFacets};
+use super::super::contact::soft_terms;
 use super::super::contact::{self, Contact, FacetMotion, FreeNode};
 use super::super::coupling::{BodyMotion, Substep};
-use super::super::integrator::{AfterContacts, Bound, Integrate};
+use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
 use super::super::math::{Real, Vector, FACET_ARITY};
 use super::super::mesh::Mesh;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
@@ -89,11 +90,13 @@ pub(super) struct Member<'m, 'a> {
 }
 
 /// Runs the substeps of a group's step, the velocities advanced by `integrator`; with `soft`,
-/// the members meet each other's surfaces (and their own, with self contact) every substep.
+/// the members meet each other's surfaces (and their own, with self contact) every substep,
+/// inside the integrator's solve with `together` ([`step_together`]), else on the velocities
+/// after it ([`soft_contacts`]).
 pub(super) fn run(
     integrator: &impl Integrate,
     members: &mut [Member<'_, '_>],
-    soft: bool,
+    (soft, together): (bool, bool),
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
 ) {
@@ -107,11 +110,21 @@ pub(super) fn run(
     let mut t = 0.0;
     let mut substeps = 0;
     while let Some(h) = next_substep(integrator, members, &live, ctx, dt - t, substeps) {
+        if together {
+            let h = h.min(motion_bound(members, dt - t));
+            let at = substep_at(ctx, 0.0, h, t, &[]);
+            step_together(integrator, members, (&live, &motions), ctx, &at, bodies);
+            rigid_passes(members, &live, ctx, (h, t), &motions, false, bodies);
+            move_positions(members, &live, h);
+            t += h;
+            substeps += 1;
+            continue;
+        }
         for j in 0..live.len() {
             let i = live[order(substeps % 2 == 1, live.len(), j)];
             let m = &mut members[i];
             let at = substep_at(ctx, m.sc.broad.skin, h, t, &motions[i]);
-            advance(integrator, m, ctx, &at, bodies);
+            advance(integrator, m, ctx, &at, bodies, false);
         }
         rigid_passes(
             members,
@@ -127,25 +140,287 @@ pub(super) fn run(
             soft_contacts(members, &at, substeps % 2 == 1);
         }
 
-        for &i in &live {
-            let m = &mut members[i];
-            let body = &mut *m.body;
-            for (x, v) in body.state.positions.iter_mut().zip(&body.state.velocities) {
-                *x += *v * h;
-            }
-            attach::place_on_bones(
-                &body.bindings,
-                &m.sc.bones.targets,
-                &mut body.state.positions,
-            );
-            body.step.forces_valid = false;
-            m.stats.substeps += 1;
-        }
+        move_positions(members, &live, h);
         t += h;
         substeps += 1;
     }
     for (m, motions) in members.iter_mut().zip(motions) {
         m.sc.broad.motions = motions;
+    }
+}
+
+/// Most substeps an island solved together takes in a step.
+const MAX_TOGETHER_SUBSTEPS: usize = 16;
+
+/// The substep of an island solved together that splits `remaining` evenly so that no two
+/// members' nodes close on each other by more than a quarter of the shortest surface edge in
+/// it: the contact terms' planes, fixed for a substep, hold only that far (a tumbling cube's
+/// node slides off the facet it was found on, or comes through one at a corner).
+fn motion_bound(members: &[Member<'_, '_>], remaining: Real) -> Real {
+    let mut reach = Real::INFINITY;
+    let (mut lo, mut hi) = (
+        Vector::splat(Real::INFINITY),
+        Vector::splat(Real::NEG_INFINITY),
+    );
+    let mut spread: Real = 0.0;
+    for m in members {
+        reach = reach.min(m.sc.soft.soft_surface.margin());
+        let body = &*m.body;
+        let v = &body.state.velocities;
+        let masses = &body.rest.masses;
+        let mass: Real = masses.iter().sum();
+        let mean = if m.live && mass > 0.0 {
+            v.iter().zip(masses).map(|(v, m)| *v * *m).sum::<Vector>() / mass
+        } else {
+            Vector::ZERO
+        };
+        lo = lo.min(mean);
+        hi = hi.max(mean);
+        if m.live {
+            let own = v.iter().map(|v| (*v - mean).length()).fold(0.0, Real::max);
+            spread = spread.max(own);
+        }
+    }
+    let closing = (hi - lo).length() + 2.0 * spread;
+    if !(closing > 0.0 && reach > 0.0) {
+        return remaining;
+    }
+    let count = (remaining * closing / reach)
+        .ceil()
+        .clamp(1.0, MAX_TOGETHER_SUBSTEPS as Real);
+    remaining / count
+}
+
+/// Every live member's positions moved by its velocities over `h`, bound nodes placed on
+/// their bones.
+fn move_positions(members: &mut [Member<'_, '_>], live: &[usize], h: Real) {
+    for &i in live {
+        let m = &mut members[i];
+        let body = &mut *m.body;
+        for (x, v) in body.state.positions.iter_mut().zip(&body.state.velocities) {
+            *x += *v * h;
+        }
+        attach::place_on_bones(
+            &body.bindings,
+            &m.sc.bones.targets,
+            &mut body.state.positions,
+        );
+        body.step.forces_valid = false;
+        m.stats.substeps += 1;
+    }
+}
+
+/// The step of an island the integrator solves with its contacts between deformables
+/// ([`Integrate::solve_together`]): each live member's velocities and collider contacts, the
+/// contacts between the members found on those velocities ([`soft_terms`]), the island's
+/// solve, then each member's answer to its collider contacts.
+fn step_together(
+    integrator: &impl Integrate,
+    members: &mut [Member<'_, '_>],
+    (live, motions): (&[usize], &[Vec<BodyMotion>]),
+    ctx: &StepContext<'_>,
+    at: &Substep<'_>,
+    bodies: &mut RigidBodySet,
+) {
+    let mut before: Vec<Vec<Vector>> = vec![Vec::new(); members.len()];
+    for &i in live {
+        let m = &mut members[i];
+        let at = substep_at(ctx, m.sc.broad.skin, at.h, at.t, &motions[i]);
+        before[i] = advance(integrator, m, ctx, &at, bodies, true).unwrap_or_default();
+    }
+    let mut terms = soft_terms::Terms::default();
+    contact_terms(members, at, &mut terms.terms);
+    let lifts: Vec<_> = members
+        .iter()
+        .zip(&before)
+        .map(|(m, b)| {
+            if b.is_empty() {
+                Vec::new()
+            } else {
+                lifts(&m.sc.touch, b.len())
+            }
+        })
+        .collect();
+    let sets: Vec<Vec<Vector>> = members
+        .iter()
+        .map(|m| m.body.state.velocities.clone())
+        .collect();
+    let mut together: Vec<Together<'_>> = members
+        .iter_mut()
+        .zip(before)
+        .zip(lifts)
+        .map(|((m, before), lift)| Together {
+            g: ctx.gravity * m.body.gravity_scale,
+            live: m.live,
+            before: if m.live {
+                before
+            } else {
+                m.body.state.velocities.clone()
+            },
+            lift: if m.live {
+                lift
+            } else {
+                vec![None; m.body.num_nodes()]
+            },
+            body: &mut *m.body,
+            reactions: Vec::new(),
+        })
+        .collect();
+    let solved = integrator.solve_together(&mut together, &mut terms, at.h);
+    let reactions: Vec<(Vec<Vector>, Vec<Vector>)> = together
+        .into_iter()
+        .map(|t| (t.before, t.reactions))
+        .collect();
+    if !solved {
+        return;
+    }
+    for (i, ((before, reactions), set)) in reactions.into_iter().zip(sets).enumerate() {
+        let m = &mut members[i];
+        if !m.live {
+            continue;
+        }
+        let given = Given {
+            before: &before,
+            set: &set,
+            reactions: &reactions,
+        };
+        let own = substep_at(ctx, m.sc.broad.skin, at.h, at.t, &motions[i]);
+        answered(m, &own, bodies, given);
+    }
+    after_terms(members, &terms, at);
+}
+
+/// The contact terms between the members on their current velocities: each free surface node
+/// of each member against the other members' surface facets (and its own, with self contact),
+/// as [`soft_contacts`] finds them, with a skin as wide as the widest member's margin so the
+/// island's solve sees the contacts its sweeps may make; each starts from what the same
+/// contact carried over from the last step.
+fn contact_terms(
+    members: &mut [Member<'_, '_>],
+    at: &Substep<'_>,
+    out: &mut Vec<soft_terms::Term>,
+) {
+    let skin = members
+        .iter()
+        .map(|m| m.sc.soft.soft_surface.margin())
+        .fold(0.0, Real::max);
+    let at = Substep { skin, ..*at };
+    let (mut hits, mut exits) = (Vec::new(), Vec::new());
+    for i in 0..members.len() {
+        if members[i].body.activation.frozen {
+            continue;
+        }
+        let first = out.len();
+        let surface = members[i].body.rest.mesh.boundary_nodes().len();
+        for k in 0..surface {
+            let m = &members[i];
+            let (b0, b1) = (
+                m.sc.soft.soft_start[k] as usize,
+                m.sc.soft.soft_start[k + 1] as usize,
+            );
+            if b0 == b1 {
+                continue;
+            }
+            let node = m.body.rest.mesh.boundary_nodes()[k];
+            let cands = &m.sc.soft.soft_cands[b0..b1];
+            let body_of = |j: usize| (&*members[j].body, &members[j].sc.soft.soft_surface);
+            soft::find(body_of, i, node, cands, &at, (&mut hits, &mut exits));
+            let still = !members[i].live;
+            hits.retain(|h| !still || (h.other != i && members[h.other].live));
+            for hit in hits.drain(..) {
+                let term = if hit.other == i {
+                    let still = soft::Still {
+                        node: false,
+                        facet: false,
+                    };
+                    soft_terms::Term::new((i, members[i].body), node, None, still, &hit, &at)
+                } else {
+                    let (a, b) = pair_mut(members, i, hit.other);
+                    let still = soft::Still {
+                        node: !a.live,
+                        facet: !b.live,
+                    };
+                    soft_terms::Term::new((i, a.body), node, Some(b.body), still, &hit, &at)
+                };
+                out.extend(term);
+            }
+        }
+        // Warm starts from the node's body's memory, split among the node's terms with the
+        // same body.
+        let memory = &members[i].body.step.soft_memory;
+        let handles: Vec<DeformableHandle> = members.iter().map(|m| m.handle).collect();
+        let key = |t: &soft_terms::Term| (t.node(), handles[t.facet_member]);
+        for t in first..out.len() {
+            let (node, other) = key(&out[t]);
+            let found = memory.binary_search_by(|m| {
+                (m.node, m.other.into_raw_parts()).cmp(&(node, other.into_raw_parts()))
+            });
+            if let Ok(found) = found {
+                let count = out[first..]
+                    .iter()
+                    .filter(|u| key(u) == (node, other))
+                    .count();
+                let remembered = memory[found];
+                out[t].warm(&remembered, 1.0 / count as Real);
+            }
+        }
+    }
+}
+
+/// After the island's solve: each member's memory of its contacts, its contact counts and the
+/// members it touched; a still member a push would move faster than the wake speed wakes.
+fn after_terms(members: &mut [Member<'_, '_>], terms: &soft_terms::Terms, at: &Substep<'_>) {
+    let handles: Vec<DeformableHandle> = members.iter().map(|m| m.handle).collect();
+    for m in members.iter_mut() {
+        m.body.step.soft_memory.clear();
+    }
+    for t in &terms.terms {
+        let (i, j) = (t.node_member, t.facet_member);
+        if t.pushes() {
+            let m = &mut members[i];
+            if i == j {
+                m.stats.self_contacts += 1;
+            } else {
+                m.stats.soft_contacts += 1;
+                if !m.touched.contains(&j) {
+                    m.touched.push(j);
+                }
+            }
+        }
+        let memory = t.memory(handles[j]);
+        let list = &mut members[i].body.step.soft_memory;
+        match list
+            .iter_mut()
+            .find(|m| m.node == memory.node && m.other == memory.other)
+        {
+            Some(m) => {
+                m.k = m.k.max(memory.k);
+                m.lambda += memory.lambda;
+                m.lambda_t += memory.lambda_t;
+            }
+            None => list.push(memory),
+        }
+        // A still side pushed faster than the wake speed wakes for the next step.
+        let speed = at.restitution_threshold;
+        if !members[j].live && i != j {
+            let b = &members[j].body;
+            let w = b.rest.inv_masses[t.facet()[0] as usize];
+            if t.speed_given(at.h, w) > speed {
+                members[j].body.wake_up();
+            }
+        }
+        if !members[i].live && i != j {
+            let b = &members[i].body;
+            if t.speed_given(at.h, b.rest.inv_masses[t.node() as usize]) > speed {
+                members[i].body.wake_up();
+            }
+        }
+    }
+    for m in members.iter_mut() {
+        m.body
+            .step
+            .soft_memory
+            .sort_unstable_by_key(|m| (m.node, m.other.into_raw_parts()));
     }
 }
 
@@ -283,14 +558,18 @@ fn next_substep(
 }
 
 /// One member's substep up to its positions: the integrator's velocities, the bone drive, the
-/// contacts with rigid colliders.
+/// contacts with rigid colliders. With `together` (an island the integrator solves with its
+/// contacts between deformables, [`Integrate::solve_together`]), it stops after the first
+/// contact pass and returns the velocities before it; the island's solve and [`answered`]
+/// follow.
 fn advance(
     integrator: &impl Integrate,
     m: &mut Member<'_, '_>,
     ctx: &StepContext<'_>,
     at: &Substep<'_>,
     bodies: &mut RigidBodySet,
-) {
+    together: bool,
+) -> Option<Vec<Vector>> {
     let g = ctx.gravity * m.body.gravity_scale;
     let body = &mut *m.body;
     let sc = &mut *m.sc;
@@ -305,7 +584,7 @@ fn advance(
     body.step
         .scratch_velocities
         .copy_from_slice(&body.state.velocities);
-    let contacts_follow = !m.candidates.is_empty();
+    let contacts_follow = together || !m.candidates.is_empty();
     integrator.advance_velocities(body, g, at.h, contacts_follow);
 
     // Bound nodes follow their bones.
@@ -327,56 +606,82 @@ fn advance(
     let candidates = &mut m.candidates;
     let rows = &mut m.rigid_rows;
     rows.clear();
-    if !candidates.is_empty() {
-        let stats = &mut m.stats;
-        let before = answers.then(|| body.state.velocities.clone());
-        timed(&mut m.times.contacts, || {
-            for c in candidates.iter_mut() {
-                c.advance(at.s1, at.dt, at.motions, bodies);
-            }
-            // Sequential impulses in one fixed order are lopsided (a box landing flat on a
-            // soft cube was kicked sideways and kept swaying): the sweeps alternate.
-            let backward = stats.substeps % 2 == 1;
-            stats.facet_contacts += sweep_contacts(
-                body,
-                (at, backward, sharing),
-                bodies,
-                sc,
-                (candidates, rows),
-            );
-        });
-        // An implicit integrator lets the rest of the body answer the contacts within the
-        // step, then the contacts see the result.
-        if let Some(before) = before {
-            let mut lift = vec![None; before.len()];
-            for c in sc.touch.last_contact.iter().flatten() {
-                if let Some(i) = c.node {
-                    lift[i as usize] = Some((c.point, c.normal));
-                }
-            }
-            let after = AfterContacts {
-                before: &before,
-                lift: &lift,
-            };
-            let set = body.state.velocities.clone();
-            let mut reactions = Vec::new();
-            if integrator.after_contacts(body, g, at.h, after, &mut reactions) {
-                let given = Given {
-                    before: &before,
-                    set: &set,
-                    reactions: &reactions,
-                };
-                given.pass_on(body, at, &sc.touch, candidates, bodies);
-                timed(&mut m.times.contacts, || {
-                    let backward = stats.substeps % 2 == 1;
-                    rows.clear();
-                    let sweep = (at, backward, sharing);
-                    stats.facet_contacts +=
-                        sweep_contacts(body, sweep, bodies, sc, (candidates, rows));
-                });
-            }
+    if candidates.is_empty() {
+        return together.then(|| body.state.velocities.clone());
+    }
+    let stats = &mut m.stats;
+    let before = answers.then(|| body.state.velocities.clone());
+    timed(&mut m.times.contacts, || {
+        for c in candidates.iter_mut() {
+            c.advance(at.s1, at.dt, at.motions, bodies);
+        }
+        // Sequential impulses in one fixed order are lopsided (a box landing flat on a
+        // soft cube was kicked sideways and kept swaying): the sweeps alternate.
+        let backward = stats.substeps % 2 == 1;
+        stats.facet_contacts += sweep_contacts(
+            body,
+            (at, backward, sharing),
+            bodies,
+            sc,
+            (candidates, rows),
+        );
+    });
+    let before = before?;
+    if together {
+        return Some(before);
+    }
+    // An implicit integrator lets the rest of the body answer the contacts within the
+    // step, then the contacts see the result.
+    let lift = lifts(&sc.touch, before.len());
+    let after = AfterContacts {
+        before: &before,
+        lift: &lift,
+    };
+    let set = body.state.velocities.clone();
+    let mut reactions = Vec::new();
+    if integrator.after_contacts(body, g, at.h, after, &mut reactions) {
+        let given = Given {
+            before: &before,
+            set: &set,
+            reactions: &reactions,
+        };
+        answered(m, at, bodies, given);
+    }
+    None
+}
+
+/// Per node, where the substep's collider contacts left it ([`AfterContacts::lift`]).
+fn lifts(touch: &Touch, nodes: usize) -> Vec<Option<(Vector, Vector)>> {
+    let mut lift = vec![None; nodes];
+    for c in touch.last_contact.iter().flatten() {
+        if let Some(i) = c.node {
+            lift[i as usize] = Some((c.point, c.normal));
         }
     }
+    lift
+}
+
+/// After the integrator answered the collider contacts: the dynamic bodies get the rest of
+/// the held nodes' reactions ([`Given::pass_on`]) and the contacts see the result.
+fn answered(m: &mut Member<'_, '_>, at: &Substep<'_>, bodies: &mut RigidBodySet, given: Given<'_>) {
+    let body = &mut *m.body;
+    let sc = &mut *m.sc;
+    let candidates = &mut m.candidates;
+    if candidates.is_empty() {
+        return;
+    }
+    given.pass_on(body, at, &sc.touch, candidates, bodies);
+    let sharing = Sharing {
+        split: !m.shares_bodies,
+        defer: false,
+    };
+    let (stats, rows) = (&mut m.stats, &mut m.rigid_rows);
+    timed(&mut m.times.contacts, || {
+        let backward = stats.substeps % 2 == 1;
+        rows.clear();
+        let sweep = (at, backward, sharing);
+        stats.facet_contacts += sweep_contacts(body, sweep, bodies, sc, (candidates, rows));
+    });
 }
 
 /// What an implicit step's holds gave the nodes the contacts stopped.
