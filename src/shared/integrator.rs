@@ -150,6 +150,12 @@ impl Integrator {
         self.implicit_for(body).is_some()
     }
 
+    /// Whether `body` takes the implicit step with its contacts with other bodies as terms
+    /// ([`Integrate::solve_together`]).
+    pub(crate) fn steps_together(&self, body: &Deformable) -> bool {
+        self.steps_implicitly(body) && body.state.elements.has_convex_implicit()
+    }
+
     /// Whether `body` takes the implicit step, and its sweeps.
     fn implicit_for(&self, body: &Deformable) -> Option<usize> {
         match *self {

@@ -1,6 +1,8 @@
 //! Contacts between deformables inside the implicit step: each contact [`soft::find`] finds is
 //! a term of the island's incremental potential, solved in the same Gauss–Seidel sweeps as the
-//! bodies' elements (Augmented Vertex Block Descent: Giles, Diaz, Yuksel, SIGGRAPH 2025).
+//! bodies' elements (Augmented Vertex Block Descent: Giles, Diaz, Yuksel, SIGGRAPH 2025). Only
+//! islands whose step energy is convex take it (shape matching,
+//! `ModelState::has_convex_implicit`).
 //!
 //! **The constraint.** A node `i` and a facet of nodes `j` with barycentric weights `w_j` and
 //! unit normal `n`, both fixed for the step: `C(x) = n·(x_i − Σ w_j x_j)`, the node's height
@@ -158,7 +160,9 @@ impl Term {
     pub fn warm(&mut self, memory: &Memory, share: Real) {
         self.k = self.k.max(memory.k * DECAY);
         self.lambda = memory.lambda * share;
-        self.lambda_t = memory.lambda_t * share;
+        // Friction acts across this term's normal only (the last step's may differ).
+        let n = self.normal;
+        self.lambda_t = (memory.lambda_t - n * n.dot(memory.lambda_t)) * share;
     }
 
     /// What this term carries over.

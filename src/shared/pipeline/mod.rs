@@ -501,16 +501,16 @@ fn step_group<'a>(
         }
     }
     // 3. substeps. The implicit step solves the contacts between its members inside its
-    // sweeps when every live member takes it; it does not answer a dynamic body that two of
-    // them push (a box pinched between two pads at 60 Hz was launched): such an island, or one
-    // with a member stepped explicitly, steps explicitly.
+    // sweeps when every live member takes it with a convex energy (shape matching); it does
+    // not answer a dynamic body that two of them push (a box pinched between two pads at 60 Hz
+    // was launched): such an island, or one with another member, steps explicitly.
     let shares = members.len() > 1 && !shared.is_empty();
     let integrator = ctx.settings.integrator;
     let together = soft
         && !shares
         && members
             .iter()
-            .all(|m| !m.live || integrator.steps_implicitly(m.body));
+            .all(|m| !m.live || integrator.steps_together(m.body));
     let integrator = if (soft || shares) && !together {
         Integrator::Explicit
     } else {
