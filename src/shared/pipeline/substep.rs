@@ -305,65 +305,38 @@ fn contact_terms(
         .map(|m| m.sc.soft.soft_surface.margin())
         .fold(0.0, Real::max);
     let at = Substep { skin, ..*at };
-    let (mut hits, mut exits) = (Vec::new(), Vec::new());
-    for i in 0..members.len() {
-        if members[i].body.activation.frozen {
-            continue;
-        }
-        let first = out.len();
-        let surface = members[i].body.rest.mesh.boundary_nodes().len();
-        for k in 0..surface {
-            let m = &members[i];
-            let (b0, b1) = (
-                m.sc.soft.soft_start[k] as usize,
-                m.sc.soft.soft_start[k + 1] as usize,
-            );
-            if b0 == b1 {
-                continue;
-            }
-            let node = m.body.rest.mesh.boundary_nodes()[k];
-            let cands = &m.sc.soft.soft_cands[b0..b1];
-            let body_of = |j: usize| (&*members[j].body, &members[j].sc.soft.soft_surface);
-            soft::find(body_of, i, node, cands, &at, (&mut hits, &mut exits));
-            let still = !members[i].live;
-            hits.retain(|h| !still || (h.other != i && members[h.other].live));
-            for hit in hits.drain(..) {
-                let term = if hit.other == i {
-                    let still = soft::Still {
-                        node: false,
-                        facet: false,
-                    };
-                    soft_terms::Term::new((i, members[i].body), node, None, still, &hit, &at)
-                } else {
-                    let (a, b) = pair_mut(members, i, hit.other);
-                    let still = soft::Still {
-                        node: !a.live,
-                        facet: !b.live,
-                    };
-                    soft_terms::Term::new((i, a.body), node, Some(b.body), still, &hit, &at)
-                };
-                out.extend(term);
-            }
-        }
-        // Warm starts from the node's body's memory, split among the node's terms with the
-        // same body.
-        let memory = &members[i].body.step.soft_memory;
-        let handles: Vec<DeformableHandle> = members.iter().map(|m| m.handle).collect();
-        let key = |t: &soft_terms::Term| (t.node(), handles[t.facet_member]);
-        for t in first..out.len() {
-            let (node, other) = key(&out[t]);
+    each_soft_hit(members, &at, false, |members, i, node, hit| {
+        let (body, other, still) = sides(members, i, hit);
+        out.extend(soft_terms::Term::new(body, node, other, still, hit, &at));
+    });
+    // Warm starts from the node's body's memory, split among the node's terms with the same
+    // body (a node's terms are found together).
+    let handles: Vec<DeformableHandle> = members.iter().map(|m| m.handle).collect();
+    let key = |t: &soft_terms::Term| (t.node_member, t.node(), handles[t.facet_member]);
+    let mut start = 0;
+    while start < out.len() {
+        let (member, node, _) = key(&out[start]);
+        let end = start
+            + out[start..]
+                .iter()
+                .take_while(|t| (t.node_member, t.node()) == (member, node))
+                .count();
+        let memory = &members[member].body.step.soft_memory;
+        for t in start..end {
+            let (_, node, other) = key(&out[t]);
             let found = memory.binary_search_by(|m| {
                 (m.node, m.other.into_raw_parts()).cmp(&(node, other.into_raw_parts()))
             });
             if let Ok(found) = found {
-                let count = out[first..]
+                let count = out[start..end]
                     .iter()
-                    .filter(|u| key(u) == (node, other))
+                    .filter(|u| key(u) == key(&out[t]))
                     .count();
                 let remembered = memory[found];
                 out[t].warm(&remembered, 1.0 / count as Real);
             }
         }
+        start = end;
     }
 }
 
@@ -963,6 +936,36 @@ fn facet_contacts(
 /// (one side at least live), and its own with self contact (see
 /// [`soft`](super::super::contact::soft)): each contact found is solved at once.
 fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: bool) {
+    each_soft_hit(members, at, backward, |members, i, node, hit| {
+        let (body, other, still) = sides(members, i, hit);
+        let Some(mut row) = soft::row(body, node, other, still, hit, at) else {
+            return;
+        };
+        if solve_row(members, &mut row, Some(at.restitution_threshold)) {
+            let other = hit.other;
+            let m = &mut members[i];
+            if other == i {
+                m.stats.self_contacts += 1;
+            } else {
+                m.stats.soft_contacts += 1;
+                if !m.touched.contains(&other) {
+                    m.touched.push(other);
+                }
+            }
+        }
+    });
+}
+
+/// Calls `each(members, i, node, hit)` for every contact [`soft::find`] finds between a free
+/// surface node of member `i` and the surface facets of the other members (one side at least
+/// live), or its own with self contact, the nodes of each member in turn (`backward`: last
+/// first).
+fn each_soft_hit(
+    members: &mut [Member<'_, '_>],
+    at: &Substep<'_>,
+    backward: bool,
+    mut each: impl FnMut(&mut [Member<'_, '_>], usize, u32, &soft::SoftHit),
+) {
     let (mut hits, mut exits) = (Vec::new(), Vec::new());
     for i in 0..members.len() {
         if members[i].body.activation.frozen {
@@ -987,47 +990,36 @@ fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: boo
             let still = !members[i].live;
             hits.retain(|h| !still || (h.other != i && members[h.other].live));
             for hit in hits.drain(..) {
-                let Some(mut row) = new_row(members, i, node, &hit, at) else {
-                    continue;
-                };
-                if solve_row(members, &mut row, Some(at.restitution_threshold)) {
-                    let other = hit.other;
-                    let m = &mut members[i];
-                    if other == i {
-                        m.stats.self_contacts += 1;
-                    } else {
-                        m.stats.soft_contacts += 1;
-                        if !m.touched.contains(&other) {
-                            m.touched.push(other);
-                        }
-                    }
-                }
+                each(members, i, node, &hit);
             }
         }
     }
 }
 
-/// The row of a contact `find` found for `node` of member `i`.
-fn new_row(
-    members: &mut [Member<'_, '_>],
+/// The two sides of a contact `find` found for a node of member `i`: its body, the facet's
+/// body (`None` with self contact) and which of them is still.
+fn sides<'s>(
+    members: &'s mut [Member<'_, '_>],
     i: usize,
-    node: u32,
     hit: &soft::SoftHit,
-    at: &Substep<'_>,
-) -> Option<soft::SoftRow> {
+) -> (
+    (usize, &'s mut Deformable),
+    Option<&'s Deformable>,
+    soft::Still,
+) {
     if hit.other == i {
         let still = soft::Still {
             node: false,
             facet: false,
         };
-        return soft::row((i, members[i].body), node, None, still, hit, at);
+        return ((i, &mut *members[i].body), None, still);
     }
     let (a, b) = pair_mut(members, i, hit.other);
     let still = soft::Still {
         node: !a.live,
         facet: !b.live,
     };
-    soft::row((i, a.body), node, Some(b.body), still, hit, at)
+    ((i, &mut *a.body), Some(&*b.body), still)
 }
 
 /// One update of a soft row on its members' velocities; whether it applied an impulse. With
