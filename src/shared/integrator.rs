@@ -278,7 +278,6 @@ impl Integrator {
         }
         let iterations = iterations.max(MIN_TOGETHER_SWEEPS);
         let nodes: Vec<usize> = members.iter().map(|m| m.body.num_nodes()).collect();
-        terms.index(&nodes);
         let holds: Vec<Vec<Hold>> = members
             .iter()
             .map(|m| {
@@ -289,6 +288,9 @@ impl Integrator {
                 held_nodes(m.body, h, Some(at))
             })
             .collect();
+        terms.index(&nodes, |m, i| {
+            members[m].live && matches!(holds[m][i as usize], Hold::At(_) | Hold::Contact { .. })
+        });
         // A member no collider stopped goes on from where its first sweep went; one that was
         // stopped starts afresh (as [`Integrate::after_contacts`] does).
         let starts: Vec<Option<Vec<Vector>>> = members
