@@ -47,21 +47,17 @@ use super::super::set::DeformableHandle;
 use super::soft::{self, SoftHit, Still};
 
 /// Penalty stiffness at a new contact, and the least a remembered one decays to, over the
-/// node's inertia `m/h²`. At 1, a resting tower's contacts softened step after step until
-/// they gave, then stiffened again: six cubes kept rocking at 1–4 cm/s and never slept.
+/// node's inertia `m/h²`: softer, a resting stack's contacts give a little each step and
+/// stiffen again, and the stack rocks instead of sleeping.
 const START_STIFFNESS: Real = 5.0;
-/// Largest penalty stiffness, over the node's inertia. Two squares whose corners crossed
-/// (each one's corner behind the other's facet, each corner a node of the other term's facet)
-/// held stiff terms that Gauss–Seidel satisfied in turn, each undoing the other: at 1000 the
-/// depth stayed at 1–2 mm while `λ` grew to 1–2 kN, and a 2D pile of fifty gained 2.9 % of its
-/// energy; at 10, 0.07 %, with `λ` carrying the load over the steps. (`scenes pile --dim 2 3
-/// --bodies 10 50 --model shape-matching --integrator implicit --sweeps 4`; at 3 the 3D pile of
-/// fifty went 11 mm into itself while falling.)
+/// Largest penalty stiffness, over the node's inertia: stiffer terms that share nodes (two
+/// corners crossed, each behind the other's facet) undo each other sweep after sweep, the
+/// depth stays while `λ` grows to kilonewtons and throws the nodes; below it, `λ` carries the
+/// load over the steps.
 const MAX_STIFFNESS: Real = 10.0;
 /// Growth of the penalty stiffness per sweep, over the node's inertia and per depth of the
-/// facet body's depth limit. Much faster growth made the penalty dwarf the nodes' inertia
-/// and elasticity: a facet node of weight `w` then steps `C/w` in its Newton step, and two
-/// cubes meeting at 2 m/s flew apart at 6 m/s.
+/// facet body's depth limit: a penalty that dwarfs the nodes' inertia and elasticity makes a
+/// facet node of weight `w` step `C/w` in its Newton step.
 const GROWTH: Real = 10.0;
 /// Share of a contact's penalty stiffness kept for the next step.
 const DECAY: Real = 0.9;
