@@ -13,6 +13,7 @@ use super::super::lib::math::{self, Real, Vector, FACET_ARITY, SIMPLEX_ARITY};
 use super::super::lib::mesh::{cell_volume, CellKind, Mesh};
 use super::super::lib::rapier::geometry::{Aabb, BoundingVolume};
 use super::super::lib::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
+use super::super::lib::rapier::parry::query::PointQuery;
 
 /// Root-mean-square distance between two trajectories sampled at the same instants, over
 /// `size` (so 0.01 is 1 % of the body). Compares the common prefix when one is shorter (a run
@@ -74,7 +75,7 @@ struct Solid<'m> {
     mesh: &'m Mesh,
     x: &'m [Vector],
     cells: Bvh,
-    facets: Vec<([Vector; FACET_ARITY], Vector)>,
+    facets: Vec<[Vector; FACET_ARITY]>,
     surface: Bvh,
 }
 
@@ -92,17 +93,14 @@ impl<'m> Solid<'m> {
                 b
             })
             .collect();
-        let facets: Vec<([Vector; FACET_ARITY], Vector)> = mesh
+        let facets: Vec<[Vector; FACET_ARITY]> = mesh
             .boundary_facets()
             .iter()
-            .map(|f| {
-                let q: [Vector; FACET_ARITY] = std::array::from_fn(|a| x[f[a] as usize]);
-                (q, math::facet_normal(&q).normalize_or_zero())
-            })
+            .map(|f| std::array::from_fn(|a| x[f[a] as usize]))
             .collect();
         let facet_boxes: Vec<Aabb> = facets
             .iter()
-            .map(|(q, _)| {
+            .map(|q| {
                 let mut b = Aabb::new_invalid();
                 q.iter().for_each(|p| b.take_point(*p));
                 b.loosened(reach)
@@ -145,17 +143,7 @@ impl<'m> Solid<'m> {
             .surface
             .intersect_aabb(&point)
             .filter(|&f| !own.is_some_and(|i| facets[f as usize].contains(&i)))
-            .map(|f| {
-                let (q, normal) = &self.facets[f as usize];
-                let w = math::facet_barycentric(q, p);
-                if w.iter().all(|&w| w >= 0.0) {
-                    (p - q[0]).dot(*normal).abs()
-                } else {
-                    q.iter()
-                        .map(|c| c.distance(p))
-                        .fold(Real::INFINITY, Real::min)
-                }
-            })
+            .map(|f| math::facet_shape(&self.facets[f as usize]).distance_to_local_point(p, true))
             .fold(Real::INFINITY, Real::min);
         Some(depth)
     }
