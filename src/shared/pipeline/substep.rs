@@ -241,9 +241,16 @@ fn step_together(
             }
         })
         .collect();
+    // The velocities the collider contacts set, for the live members' answers after the solve.
     let sets: Vec<Vec<Vector>> = members
         .iter()
-        .map(|m| m.body.state.velocities.clone())
+        .map(|m| {
+            if m.live {
+                m.body.state.velocities.clone()
+            } else {
+                Vec::new()
+            }
+        })
         .collect();
     let mut together: Vec<Together<'_>> = members
         .iter_mut()
