@@ -124,13 +124,17 @@ pub enum Integrator {
     /// sweeps of per-node Newton steps (the cost knob; `docs/ARCHITECTURE.md` §4.2). A body
     /// with contact candidates first takes one sweep to find where it is going, the contacts
     /// act on that, then `iterations` sweeps answer them with the nodes they stopped held.
-    /// Every model but centroid springs, which steps explicitly; so do bodies that meet other
-    /// deformables or have self contact on, for now (`docs/ARCHITECTURE.md` §4.2).
+    /// Every model but centroid springs, which steps explicitly. Shape-matched deformables
+    /// that may touch (or have self contact on) are solved as one island with their contacts;
+    /// islands of the other models step explicitly (`docs/ARCHITECTURE.md` §4.2).
     ///
-    /// It never adds energy, but backward Euler removes some of every motion, rigid rotation
-    /// included: undamped, a body tumbling at 1.5 rad/s loses 31–37 % of its energy in 10 s
-    /// at 60 Hz, a free vibration 15–28 % (`tests/shared/energy.rs` prints each model's). Use
-    /// the explicit step where a spin or a ring must last.
+    /// Backward Euler removes some of every motion, rigid rotation included: undamped, the
+    /// soft box of `tests/shared/energy.rs` (E = 10⁴ Pa) tumbling at 1.5 rad/s loses 38–39 % of
+    /// its energy and 20 % of its angular momentum in 10 s at 60 Hz, every model, 2 or 10
+    /// sweeps; a free vibration loses more. An unconverged step can also add energy: the same
+    /// box made stiff (E = 10⁷–10⁸ Pa) with edge repulsion ends the tumble 13–49 % above its
+    /// start, its spin axis turned by up to 38°. Use the explicit step where a spin or a ring
+    /// must last.
     ///
     /// A few sweeps do not converge on a stiff, slender body, whose bending carries a load
     /// across many cells: released under its weight, the 10:1 cantilever of `scenes bending`
