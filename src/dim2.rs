@@ -146,6 +146,21 @@ pub mod math {
         }
     }
 
+    /// The angular velocity `ω` that gives masses `m` at offsets `r` (from their centre of
+    /// mass) the angular momentum `l`: `ω = l / Σ m |r|²`.
+    pub fn angular_velocity_for(r: &[Vector], m: &[Real], l: AngVector) -> AngVector {
+        let i: Real = r
+            .iter()
+            .zip(m)
+            .map(|(ri, mi)| mi * ri.length_squared())
+            .sum();
+        if i <= Real::MIN_POSITIVE {
+            0.0
+        } else {
+            l / i
+        }
+    }
+
     /// The rotation of the polar decomposition of `a = Σ r_i R0_iᵀ`: in 2D the angle
     /// `atan2(a₂₁ − a₁₂, a₁₁ + a₂₂)`, which is the shape-based paper's eq. 9.
     pub fn polar_rotation(a: Matrix) -> Rotation {

@@ -150,6 +150,23 @@ pub mod math {
         inertia.inverse() * momentum
     }
 
+    /// The angular velocity `ω` that gives masses `m` at offsets `r` (from their centre of
+    /// mass) the angular momentum `l`: `I ω = l`, `I = Σ m (|r|² 𝟙 − r rᵀ)`. Zero when the
+    /// masses are (nearly) collinear.
+    pub fn angular_velocity_for(r: &[Vector], m: &[Real], l: AngVector) -> AngVector {
+        let mut inertia = Matrix::ZERO;
+        for (ri, mi) in r.iter().zip(m) {
+            inertia +=
+                (Matrix::from_diagonal(Vector::splat(ri.length_squared())) - outer(*ri, *ri)) * *mi;
+        }
+        let d = inertia.determinant();
+        let scale = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
+        if d.abs() <= 1e-9 * scale * scale * scale {
+            return Vector::ZERO;
+        }
+        inertia.inverse() * l
+    }
+
     /// The smallest sum of two singular values of `a` (`σ₂ + σ₃`): how fast the rotation of
     /// `a`'s polar decomposition can turn as `a` changes (`|δR| ≤ |δa| / (σ₂ + σ₃)`).
     pub fn least_singular_pair_sum(a: Matrix) -> Real {

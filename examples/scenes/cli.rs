@@ -81,6 +81,9 @@ pub enum IntegratorArg {
     Explicit,
     /// Backward Euler by Vertex Block Descent (`--sweeps`).
     Implicit,
+    /// Implicit midpoint by Vertex Block Descent (`--sweeps`): keeps a free body's energy and
+    /// angular momentum; backward Euler in steps with contacts or bones.
+    Midpoint,
 }
 
 /// On or off.
@@ -614,6 +617,9 @@ macro_rules! dimension_runner {
                     poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
                     integrator: match args.integrator {
                         Some(IntegratorArg::Implicit) => Integrator::Implicit {
+                            iterations: args.sweeps.unwrap_or(10),
+                        },
+                        Some(IntegratorArg::Midpoint) => Integrator::Midpoint {
                             iterations: args.sweeps.unwrap_or(10),
                         },
                         _ => Integrator::Explicit,

@@ -14,6 +14,9 @@ use super::math::Rotation;
 use super::math::{Matrix, Real, Vector};
 use super::model::{self, Hold, Solve, StepInput};
 
+mod midpoint;
+pub(crate) use midpoint::MidpointState;
+
 /// How long the next substep may be at the body's current state.
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct Bound {
@@ -59,6 +62,10 @@ pub(crate) trait Integrate {
         reactions.clear();
         false
     }
+
+    /// After the loop moved `body`'s positions by its velocities over the substep: lets a
+    /// scheme whose position update is not by the end velocities set those.
+    fn after_move(&self, _body: &mut Deformable) {}
 
     /// Whether the step reads the element forces ([`Deformable::refresh_forces`]) for `body`.
     fn uses_forces(&self, _body: &Deformable) -> bool {
@@ -146,6 +153,24 @@ pub enum Integrator {
         /// Sweeps per step.
         iterations: usize,
     },
+    /// Implicit midpoint by Vertex Block Descent: the implicit step over half the step, its
+    /// motion then carried on to the step's end, so that undamped motion keeps its energy and
+    /// its angular momentum (a spin, a ring) where backward Euler removes some of each every
+    /// step. Unconverged sweeps can make the midpoint rule unstable on a stiff body; a body
+    /// nothing touches keeps its angular momentum exactly and never ends a step with more
+    /// energy than it had, falling back to backward Euler for the steps that need it
+    /// (`integrator/midpoint.rs` tells how). Steps in which a contact or a bone acts, and
+    /// islands solved with their contacts, take backward Euler as [`Integrator::Implicit`]
+    /// does, with the same `iterations`.
+    ///
+    /// Undamped, at 60 Hz with 2 sweeps, the box of `tests/shared/energy.rs` (E = 10⁴ Pa)
+    /// tumbling at 1.5 rad/s keeps its angular momentum to 10⁻⁵ and its energy within 0.02 %
+    /// over 30 s, where backward Euler loses 20 % and 38 % in 10 s; let go from a 5 % stretch,
+    /// it rings on within 1 % of its energy.
+    Midpoint {
+        /// Sweeps per step.
+        iterations: usize,
+    },
 }
 
 impl Integrator {
@@ -163,7 +188,9 @@ impl Integrator {
     /// Whether `body` takes the implicit step, and its sweeps.
     fn implicit_for(&self, body: &Deformable) -> Option<usize> {
         match *self {
-            Integrator::Implicit { iterations } if body.state.elements.has_implicit() => {
+            Integrator::Implicit { iterations } | Integrator::Midpoint { iterations }
+                if body.state.elements.has_implicit() =>
+            {
                 Some(iterations.max(1))
             }
             _ => None,
@@ -190,9 +217,20 @@ impl Integrate for Integrator {
         // Bound nodes keep the velocity the last bone drive gave them; the drive follows. When
         // contacts follow, this solve only tells them where the body is going (the solve after
         // them starts afresh): one sweep.
+        if matches!(self, Integrator::Midpoint { .. }) && !contacts_follow {
+            let theta_h = midpoint::begin(body) * h;
+            let held = held_nodes(body, theta_h, None);
+            implicit_pass(body, g, theta_h, iterations, &held, false, &mut Vec::new());
+            return;
+        }
+        body.step.midpoint.forget();
         let held = held_nodes(body, h, None);
         let sweeps = if contacts_follow { 1 } else { iterations };
         implicit_pass(body, g, h, sweeps, &held, false, &mut Vec::new());
+    }
+
+    fn after_move(&self, body: &mut Deformable) {
+        midpoint::finish(body);
     }
 
     fn answers_contacts(&self, body: &Deformable) -> bool {

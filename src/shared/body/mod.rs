@@ -265,6 +265,8 @@ impl Deformable {
     pub fn set_positions(&mut self, positions: &[Vector]) -> Result<(), BuildError> {
         check_state("positions", positions, self.state.positions.len())?;
         self.state.positions.copy_from_slice(positions);
+        // Shape matching's rotations follow the new shape (its energy reads them).
+        self.state.elements.refit_rotations(positions);
         self.refit_surface();
         self.step.forces_valid = false;
         self.wake_up();

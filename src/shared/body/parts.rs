@@ -7,6 +7,7 @@ use std::sync::OnceLock;
 use super::super::contact::soft::NearFacets;
 use super::super::contact::soft_terms::Memory;
 use super::super::contact::ContactPoint;
+use super::super::integrator::MidpointState;
 use super::super::material::Resolved;
 use super::super::math::{Real, Vector};
 use super::super::mesh::Mesh;
@@ -87,6 +88,8 @@ pub(crate) struct StepBuffers {
     /// What its nodes' contacts with deformables under the implicit step carried over from
     /// the last step, by node and body.
     pub soft_memory: Vec<Memory>,
+    /// The implicit midpoint step's state ([`Integrator::Midpoint`](super::super::Integrator)).
+    pub midpoint: MidpointState,
 }
 
 impl StepBuffers {
@@ -99,6 +102,7 @@ impl StepBuffers {
             saved_velocities: state.velocities.clone(),
             scratch_velocities: state.velocities.clone(),
             soft_memory: Vec::new(),
+            midpoint: MidpointState::default(),
         }
     }
 }

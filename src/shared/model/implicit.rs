@@ -408,6 +408,16 @@ impl ModelState {
         })
     }
 
+    /// Refits shape matching's rotations at `x` (a step that moved the nodes past where its
+    /// sweeps fitted them; the elastic energy and the next fit read them).
+    pub(crate) fn refit_rotations(&mut self, x: &[Vector]) {
+        if let Elements::ShapeMatching(sm) = &mut self.elements {
+            let mut rotations = sm.rotations().to_vec();
+            sm.refit(x, &mut rotations);
+            sm.rotations_mut().copy_from_slice(&rotations);
+        }
+    }
+
     /// Keeps the rotations a finished step fitted (shape matching's warm start).
     pub(crate) fn keep_rotations(&mut self, rotations: Option<Vec<Rotation>>) {
         if let (Some(rotations), Elements::ShapeMatching(sm)) = (rotations, &mut self.elements) {

@@ -115,7 +115,7 @@ pub(super) fn run(
             let at = substep_at(ctx, 0.0, h, t, &[]);
             step_together(integrator, members, (&live, &motions), ctx, &at, bodies);
             rigid_passes(members, &live, ctx, (h, t), &motions, false, bodies);
-            move_positions(members, &live, h);
+            move_positions(integrator, members, &live, h);
             t += h;
             substeps += 1;
             continue;
@@ -140,7 +140,7 @@ pub(super) fn run(
             soft_contacts(members, &at, substeps % 2 == 1);
         }
 
-        move_positions(members, &live, h);
+        move_positions(integrator, members, &live, h);
         t += h;
         substeps += 1;
     }
@@ -193,13 +193,19 @@ fn motion_bound(members: &[Member<'_, '_>], remaining: Real) -> Real {
 
 /// Every live member's positions moved by its velocities over `h`, bound nodes placed on
 /// their bones.
-fn move_positions(members: &mut [Member<'_, '_>], live: &[usize], h: Real) {
+fn move_positions(
+    integrator: &impl Integrate,
+    members: &mut [Member<'_, '_>],
+    live: &[usize],
+    h: Real,
+) {
     for &i in live {
         let m = &mut members[i];
         let body = &mut *m.body;
         for (x, v) in body.state.positions.iter_mut().zip(&body.state.velocities) {
             *x += *v * h;
         }
+        integrator.after_move(body);
         attach::place_on_bones(
             &body.bindings,
             &m.sc.bones.targets,

@@ -230,6 +230,9 @@ impl Candidate {
             Integrator::Implicit { iterations } => {
                 format!("{} implicit {iterations}", self.model.name())
             }
+            Integrator::Midpoint { iterations } => {
+                format!("{} midpoint {iterations}", self.model.name())
+            }
         }
     }
 

@@ -641,13 +641,17 @@ pub(super) fn integrator_name(subject: Subject, integrator: Integrator) -> Optio
         (Subject::Rapier(_), _) => None,
         (_, Integrator::Explicit) => Some("explicit".to_string()),
         (_, Integrator::Implicit { .. }) => Some("implicit".to_string()),
+        (_, Integrator::Midpoint { .. }) => Some("midpoint".to_string()),
     }
 }
 
 /// The implicit integrator's sweeps for a record (`None` otherwise).
 pub(super) fn sweeps(subject: Subject, integrator: Integrator) -> Option<usize> {
     match (subject, integrator) {
-        (Subject::Sinew(_), Integrator::Implicit { iterations }) => Some(iterations),
+        (
+            Subject::Sinew(_),
+            Integrator::Implicit { iterations } | Integrator::Midpoint { iterations },
+        ) => Some(iterations),
         _ => None,
     }
 }
