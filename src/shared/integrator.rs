@@ -218,9 +218,18 @@ impl Integrate for Integrator {
         // contacts follow, this solve only tells them where the body is going (the solve after
         // them starts afresh): one sweep.
         if matches!(self, Integrator::Midpoint { .. }) && !contacts_follow {
-            let theta_h = midpoint::begin(body) * h;
-            let held = held_nodes(body, theta_h, None);
-            implicit_pass(body, g, theta_h, iterations, &held, false, &mut Vec::new());
+            let held = held_nodes(body, h, None);
+            let (theta, held) = midpoint::begin(body, &held);
+            implicit_pass(
+                body,
+                g,
+                theta * h,
+                iterations,
+                &held,
+                false,
+                &mut Vec::new(),
+            );
+            midpoint::solved(body);
             return;
         }
         body.step.midpoint.forget();
