@@ -602,9 +602,10 @@ struct Start<'a> {
 impl Start<'_> {
     /// Makes the start `x` one the line search can go on from, if a cell is too flat there
     /// (the held nodes moved through it): the contact nodes of such cells lift off (from where
-    /// they started the step), then, if a cell still is, the free nodes go back to where they
-    /// started the step. (A 60 Hz ball bounced its bottom nodes up through the 2 cm layer
-    /// above, still falling, and every move of its nodes was then refused.)
+    /// they started the step), and of the cells that leaves flat in turn, then, if a cell
+    /// still is, the free nodes go back to where they started the step. (A 60 Hz ball bounced
+    /// its bottom nodes up through the 2 cm layer above, still falling, and every move of its
+    /// nodes was then refused.)
     fn fix(
         &self,
         cells: &[u32],
@@ -614,26 +615,40 @@ impl Start<'_> {
         held: &mut [Hold],
     ) {
         let count = cells.len() / arity;
-        let mut flat = false;
-        for c in 0..count {
-            if upright(c, x) {
-                continue;
-            }
-            flat = true;
-            for &i in &cells[c * arity..(c + 1) * arity] {
-                let i = i as usize;
-                if matches!(self.given[i], Hold::Contact { .. }) {
-                    held[i] = self.given[i].lifted();
-                    x[i] = held[i].start(x[i], self.x0[i]);
+        // Lifting a node off moves it back up, which can flatten a cell of its that was not:
+        // lift until no cell is flat or every contact node of the flat ones is lifted.
+        let lift = |x: &mut [Vector], held: &mut [Hold]| {
+            let mut any = false;
+            loop {
+                let mut lifted = false;
+                for c in 0..count {
+                    if upright(c, x) {
+                        continue;
+                    }
+                    any = true;
+                    for &i in &cells[c * arity..(c + 1) * arity] {
+                        let i = i as usize;
+                        if matches!(self.given[i], Hold::Contact { .. })
+                            && !matches!(held[i], Hold::Above { .. })
+                        {
+                            held[i] = self.given[i].lifted();
+                            x[i] = held[i].start(x[i], self.x0[i]);
+                            lifted = true;
+                        }
+                    }
+                }
+                if !lifted {
+                    return any;
                 }
             }
-        }
-        if flat && (0..count).any(|c| !upright(c, x)) {
+        };
+        if lift(x, held) && (0..count).any(|c| !upright(c, x)) {
             for ((x, x0), held) in x.iter_mut().zip(self.x0).zip(held.iter()) {
                 if *held == Hold::Free {
                     *x = *x0;
                 }
             }
+            lift(x, held);
         }
     }
 }
