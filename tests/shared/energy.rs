@@ -30,8 +30,8 @@ use crate::dim::math::{
 use crate::dim::rapier::dynamics::{IntegrationParameters, RigidBodySet};
 use crate::dim::rapier::geometry::{BroadPhaseBvh, ColliderSet};
 use crate::dim::{
-    CellKind, DeformableBuilder, DeformablePipeline, DeformableSet, ElementModel, Integrator,
-    Material,
+    CellKind, DeformableBuilder, DeformableHandle, DeformablePipeline, DeformableSet, ElementModel,
+    Integrator, Material,
 };
 
 const DT: Real = 1.0 / 60.0;
@@ -68,24 +68,7 @@ fn run_stiff(
     young: Real,
     seconds: Real,
 ) -> Energy {
-    let mut half = Vector::splat(0.2);
-    half[0] = 0.5;
-    if DIM == 3 {
-        half[1] = 0.3;
-    }
-    let body = DeformableBuilder::cuboid(half, [3; DIM])
-        .cells(CellKind::Simplex)
-        .model(model)
-        .material(Material {
-            density: 1000.0,
-            young_modulus: young,
-            damping_ratio: 0.0,
-            ..Default::default()
-        })
-        .build()
-        .unwrap();
-    let mut set = DeformableSet::new();
-    let h = set.insert(body);
+    let (mut set, h) = free_box(model, young);
     let centre = set[h].center_of_mass();
     let x: Vec<Vector> = set[h]
         .positions()
@@ -99,21 +82,10 @@ fn run_stiff(
     let v: Vec<Vector> = x.iter().map(|p| ang_cross(spin, *p - centre)).collect();
     set[h].set_positions(&x).unwrap();
     set[h].set_velocities(&v).unwrap();
-    let mut pipeline = DeformablePipeline::new();
-    pipeline.settings.integrator = integrator;
-    pipeline.settings.time_until_sleep = Real::INFINITY;
+    let mut pipeline = free_pipeline(integrator);
     if integrator == Integrator::Explicit {
         pipeline.settings.fixed_substeps = Some(10);
     }
-    let params = IntegrationParameters {
-        dt: DT,
-        ..Default::default()
-    };
-    let (mut bodies, colliders, bp) = (
-        RigidBodySet::new(),
-        ColliderSet::new(),
-        BroadPhaseBvh::new(),
-    );
     let energy = |set: &DeformableSet| set[h].kinetic_energy() + set[h].elastic_energy();
     let momentum = |set: &DeformableSet| {
         let b = &set[h];
@@ -125,14 +97,7 @@ fn run_stiff(
     let steps = (seconds / DT).round() as usize;
     let mut trace = Vec::with_capacity(steps);
     for _ in 0..steps {
-        pipeline.step(
-            Vector::ZERO,
-            &params,
-            &mut set,
-            &mut bodies,
-            &colliders,
-            &bp,
-        );
+        step(&mut pipeline, &mut set, Vector::ZERO);
         assert!(
             !set[h].is_frozen(),
             "{} {integrator:?}: frozen",
@@ -165,6 +130,52 @@ fn run_stiff(
             .fold(Real::INFINITY, Real::min),
         momentum: turned,
     }
+}
+
+/// A 1 × 0.6 × 0.4 m box (1 × 0.4 in 2D) of `model`, 1000 kg/m³, Young's modulus `young`,
+/// undamped, alone in a set.
+fn free_box(model: ElementModel, young: Real) -> (DeformableSet, DeformableHandle) {
+    let mut half = Vector::splat(0.2);
+    half[0] = 0.5;
+    if DIM == 3 {
+        half[1] = 0.3;
+    }
+    let body = DeformableBuilder::cuboid(half, [3; DIM])
+        .cells(CellKind::Simplex)
+        .model(model)
+        .material(Material {
+            density: 1000.0,
+            young_modulus: young,
+            damping_ratio: 0.0,
+            ..Default::default()
+        })
+        .build()
+        .unwrap();
+    let mut set = DeformableSet::new();
+    let h = set.insert(body);
+    (set, h)
+}
+
+/// A pipeline of `integrator` that never puts a body to sleep.
+fn free_pipeline(integrator: Integrator) -> DeformablePipeline {
+    let mut pipeline = DeformablePipeline::new();
+    pipeline.settings.integrator = integrator;
+    pipeline.settings.time_until_sleep = Real::INFINITY;
+    pipeline
+}
+
+/// One 60 Hz step under `gravity`, no rigid body or collider.
+fn step(pipeline: &mut DeformablePipeline, set: &mut DeformableSet, gravity: Vector) {
+    let params = IntegrationParameters {
+        dt: DT,
+        ..Default::default()
+    };
+    let (mut bodies, colliders, bp) = (
+        RigidBodySet::new(),
+        ColliderSet::new(),
+        BroadPhaseBvh::new(),
+    );
+    pipeline.step(gravity, &params, set, &mut bodies, &colliders, &bp);
 }
 
 /// 1.5 rad/s about an axis off every principal axis of the box (3D); about the plane's normal
@@ -293,33 +304,8 @@ fn the_midpoint_step_keeps_the_energy_of_a_fall() {
     // A body falling as a whole: its internal energy about zero, its centre's motion exact.
     // (Rounding once made a tiny excess of such a body read as a diverging step: it fell by
     // backward Euler.)
-    let mut half = Vector::splat(0.2);
-    half[0] = 0.5;
-    let body = DeformableBuilder::cuboid(half, [3; DIM])
-        .cells(CellKind::Simplex)
-        .model(ElementModel::EdgeRepulsion)
-        .material(Material {
-            density: 1000.0,
-            young_modulus: 1e4,
-            damping_ratio: 0.0,
-            ..Default::default()
-        })
-        .build()
-        .unwrap();
-    let mut set = DeformableSet::new();
-    let h = set.insert(body);
-    let mut pipeline = DeformablePipeline::new();
-    pipeline.settings.integrator = MIDPOINT;
-    pipeline.settings.time_until_sleep = Real::INFINITY;
-    let params = IntegrationParameters {
-        dt: DT,
-        ..Default::default()
-    };
-    let (mut bodies, colliders, bp) = (
-        RigidBodySet::new(),
-        ColliderSet::new(),
-        BroadPhaseBvh::new(),
-    );
+    let (mut set, h) = free_box(ElementModel::EdgeRepulsion, 1e4);
+    let mut pipeline = free_pipeline(MIDPOINT);
     let mut g = Vector::ZERO;
     g[1] = -9.81;
     let energy = |set: &DeformableSet| {
@@ -335,7 +321,7 @@ fn the_midpoint_step_keeps_the_energy_of_a_fall() {
     let start = energy(&set);
     let mut worst: Real = 0.0;
     for _ in 0..120 {
-        pipeline.step(g, &params, &mut set, &mut bodies, &colliders, &bp);
+        step(&mut pipeline, &mut set, g);
         worst = worst.max((energy(&set) - start).abs());
     }
     // Backward Euler loses `½ M h² g²` a step in a free fall: 256 J over these 2 s (of the
