@@ -156,12 +156,14 @@ pub enum Integrator {
     /// Implicit midpoint by Vertex Block Descent: the implicit step over half the step, its
     /// motion then carried on to the step's end, so that undamped motion keeps its energy and
     /// its angular momentum (a spin, a ring) where backward Euler removes some of each every
-    /// step. Unconverged sweeps can make the midpoint rule unstable on a stiff body; a body
-    /// nothing touches keeps its angular momentum exactly and never ends a step with more
-    /// energy than it had, falling back to backward Euler for the steps that need it
-    /// (`integrator/midpoint.rs` tells how). Steps in which a contact or a bone acts, and
-    /// islands solved with their contacts, take backward Euler as [`Integrator::Implicit`]
-    /// does, with the same `iterations`.
+    /// step. Unconverged sweeps can make the midpoint rule unstable on a stiff body, so the
+    /// body keeps its angular momentum exactly and ends no step with more energy than its
+    /// budget (what it had when last touched) except what lies in its elastic energy, which
+    /// the next steps remove by backward Euler (`integrator/midpoint.rs` tells how). Bodies
+    /// bound to bones, steps in which a contact may act, and islands solved with their
+    /// contacts take backward Euler as [`Integrator::Implicit`] does, with the same
+    /// `iterations`. A snapshot does not keep the step's state (its `θ` and energy budget): a
+    /// restored body starts them afresh.
     ///
     /// Undamped, at 60 Hz with 2 sweeps, the box of `tests/shared/energy.rs` (E = 10⁴ Pa)
     /// tumbling at 1.5 rad/s keeps its angular momentum to 10⁻⁵ and its energy within 0.02 %
@@ -217,18 +219,19 @@ impl Integrate for Integrator {
         // Bound nodes keep the velocity the last bone drive gave them; the drive follows. When
         // contacts follow, this solve only tells them where the body is going (the solve after
         // them starts afresh): one sweep.
-        if matches!(self, Integrator::Midpoint { .. }) && !contacts_follow {
+        if matches!(self, Integrator::Midpoint { .. })
+            && !contacts_follow
+            && body.bindings.len() == 0
+        {
+            // A body nothing touches: the midpoint step, or backward Euler if carrying its
+            // motion on would flatten a cell.
             let held = held_nodes(body, h, None);
-            let (theta, held) = midpoint::begin(body, &held);
-            implicit_pass(
-                body,
-                g,
-                theta * h,
-                iterations,
-                &held,
-                false,
-                &mut Vec::new(),
-            );
+            let (theta, mid) = midpoint::begin(body, &held, None);
+            implicit_pass(body, g, theta * h, iterations, &mid, false, &mut Vec::new());
+            if !midpoint::keeps_cells(body, h, theta) {
+                let (_, end) = midpoint::begin(body, &held, Some(1.0));
+                implicit_pass(body, g, h, iterations, &end, false, &mut Vec::new());
+            }
             midpoint::solved(body);
             return;
         }

@@ -24,18 +24,20 @@
 //!    motion, which changes neither momentum. (The discrete energy of a nonlinear body
 //!    oscillates within a period, ±0.2 % for the soft box of `tests/shared/energy.rs`; the
 //!    peaks that pass the budget are lost: 0.1–0.2 % in 30 s.)
-//! 3. `θ` rises toward backward Euler while the steps diverge: by [`RAISE`] after a step whose
+//! 3. a step whose carried motion would leave a cell flatter than the solve's line searches
+//!    allow ([`keeps_cells`]) is solved again by backward Euler;
+//! 4. `θ` rises toward backward Euler while the steps diverge: by [`RAISE`] after a step whose
 //!    excess passed [`SPIKE`] of the budget, to 1 when the relative motion held less than the
 //!    excess (it lies in the elastic energy, which backward Euler removes); it comes back to
 //!    `½` by [`RELAX`] a step while they do not.
 //!
-//! The centre of mass moves exactly (the implicit step's best translation), gravity included.
-//! A step in which a contact or a bone acts, or that solves an island with its contacts, takes
-//! backward Euler.
+//! The centre of mass moves exactly at `θ = ½` (the implicit step's best translation),
+//! gravity included; at `θ > ½` it ends `(θ − ½) h² g` low. A body bound to bones, a step in
+//! which a contact may act, and an island solved with its contacts take backward Euler.
 
 use super::super::body::Deformable;
 use super::super::math::{self, AngVector, Real, Vector};
-use super::super::model::Hold;
+use super::super::model::{Hold, MIN_STEP_VOLUME};
 
 /// How far above its energy a free body's budget follows it down.
 pub(crate) const SLACK: Real = 0.02;
@@ -128,9 +130,15 @@ fn internal(body: &Deformable) -> Internal {
 
 /// Starts a midpoint step of `body` from the velocities at the start of the step
 /// (`step.scratch_velocities`), its nodes held as `held` says at the step's end: returns the
-/// `θ` its backward-Euler solve is to take, with the holds moved to `x_θ`.
-pub(crate) fn begin(body: &mut Deformable, held: &[Hold]) -> (Real, Vec<Hold>) {
-    let theta = body.step.midpoint.theta;
+/// `θ` its backward-Euler solve is to take (`theta`, else the body's own), with the holds
+/// moved to `x_θ`.
+pub(crate) fn begin(
+    body: &mut Deformable,
+    held: &[Hold],
+    theta: Option<Real>,
+) -> (Real, Vec<Hold>) {
+    let theta = theta.unwrap_or(body.step.midpoint.theta);
+    body.step.midpoint.theta = theta;
     let free_nodes: Vec<bool> = held.iter().map(|h| *h == Hold::Free).collect();
     let untouched = body.bindings.len() == 0 && free_nodes.iter().all(|f| *f);
     let free = untouched.then(|| {
@@ -158,6 +166,25 @@ pub(crate) fn begin(body: &mut Deformable, held: &[Hold]) -> (Real, Vec<Hold>) {
     (theta, held)
 }
 
+/// Whether carrying the solve's motion (the velocities, `v_θ`) on to the step's end keeps
+/// every cell of `body` no flatter than [`MIN_STEP_VOLUME`] of its rest volume, or than the
+/// solve left it: the solve's line searches keep `x_θ` upright, but `x₀ + h v_θ` goes
+/// `1/θ` times as far (a soft box let go from half its length turned cells inside out).
+pub(crate) fn keeps_cells(body: &Deformable, h: Real, theta: Real) -> bool {
+    let (x0, v) = (&body.state.positions, &body.state.velocities);
+    let mid: Vec<Vector> = x0
+        .iter()
+        .zip(v)
+        .map(|(x, v)| *x + *v * (theta * h))
+        .collect();
+    let end: Vec<Vector> = x0.iter().zip(v).map(|(x, v)| *x + *v * h).collect();
+    let mesh = &body.rest.mesh;
+    (0..mesh.num_cells()).all(|c| {
+        let q = mesh.cell_quality(c, &end);
+        q >= MIN_STEP_VOLUME || q >= mesh.cell_quality(c, &mid)
+    })
+}
+
 /// Records the velocities the step's solve gave.
 pub(crate) fn solved(body: &mut Deformable) {
     if let Some(p) = &mut body.step.midpoint.pending {
@@ -166,10 +193,11 @@ pub(crate) fn solved(body: &mut Deformable) {
 }
 
 /// Ends a midpoint step after the positions moved by `h v_θ`: the end velocities, then, for a
-/// free body, its angular momentum and energy kept (see the module docs). Does nothing unless
-/// [`begin`] started a step.
+/// free body, its angular momentum and energy kept (see the module docs). After a step
+/// [`begin`] did not start (another integrator's), the budget starts afresh.
 pub(crate) fn finish(body: &mut Deformable) {
     let Some(pending) = body.step.midpoint.pending.take() else {
+        body.step.midpoint.forget();
         return;
     };
     let theta = pending.theta;
@@ -227,8 +255,9 @@ pub(crate) fn finish(body: &mut Deformable) {
         }
         end -= removed;
         // Rounding makes a tiny excess, even of a body moving rigidly (its internal energy
-        // about zero): only one above `SPIKE` of the budget or of the centre's kinetic energy
-        // marks a diverging step.
+        // about zero: an edge-repulsion box at rest reads ±4·10⁻⁵ J): only one above `SPIKE`
+        // of the budget or of the centre's kinetic energy marks a diverging step. (The excess
+        // itself is taken out whatever its size.)
         let centre = 0.5 * masses.iter().sum::<Real>() * now.centre_velocity.length_squared();
         let tolerance = SPIKE * budget.max(centre);
         if excess - relative > tolerance {

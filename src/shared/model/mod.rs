@@ -62,7 +62,7 @@ pub mod springs;
 mod tests;
 pub mod volume;
 
-pub(crate) use implicit::{Hold, Solve, StepInput};
+pub(crate) use implicit::{Hold, Solve, StepInput, MIN_STEP_VOLUME};
 
 use super::error::BuildError;
 use super::material::{Resolved, Stiffness};
