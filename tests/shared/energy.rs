@@ -70,17 +70,12 @@ fn run_stiff(
 ) -> Energy {
     let (mut set, h) = free_box(model, young);
     let centre = set[h].center_of_mass();
-    let x: Vec<Vector> = set[h]
+    lengthen(&mut set, h, 1.0 + stretch);
+    let v: Vec<Vector> = set[h]
         .positions()
         .iter()
-        .map(|p| {
-            let mut d = *p - centre;
-            d[0] *= 1.0 + stretch;
-            centre + d
-        })
+        .map(|p| ang_cross(spin, *p - centre))
         .collect();
-    let v: Vec<Vector> = x.iter().map(|p| ang_cross(spin, *p - centre)).collect();
-    set[h].set_positions(&x).unwrap();
     set[h].set_velocities(&v).unwrap();
     let mut pipeline = free_pipeline(integrator);
     if integrator == Integrator::Explicit {
@@ -154,6 +149,21 @@ fn free_box(model: ElementModel, young: Real) -> (DeformableSet, DeformableHandl
     let mut set = DeformableSet::new();
     let h = set.insert(body);
     (set, h)
+}
+
+/// Stretches body `h` along x about its centre of mass by `factor`.
+fn lengthen(set: &mut DeformableSet, h: DeformableHandle, factor: Real) {
+    let centre = set[h].center_of_mass();
+    let x: Vec<Vector> = set[h]
+        .positions()
+        .iter()
+        .map(|p| {
+            let mut d = *p - centre;
+            d[0] *= factor;
+            centre + d
+        })
+        .collect();
+    set[h].set_positions(&x).unwrap();
 }
 
 /// A pipeline of `integrator` that never puts a body to sleep.
@@ -341,17 +351,7 @@ fn the_midpoint_step_turns_no_cell_inside_out() {
     for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
         for squash in [0.5, 1.5] {
             let (mut set, h) = free_box(model, 1e4);
-            let centre = set[h].center_of_mass();
-            let x: Vec<Vector> = set[h]
-                .positions()
-                .iter()
-                .map(|p| {
-                    let mut d = *p - centre;
-                    d[0] *= squash;
-                    centre + d
-                })
-                .collect();
-            set[h].set_positions(&x).unwrap();
+            lengthen(&mut set, h, squash);
             let mut pipeline = free_pipeline(MIDPOINT);
             for k in 0..300 {
                 step(&mut pipeline, &mut set, Vector::ZERO);
