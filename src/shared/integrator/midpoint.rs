@@ -104,7 +104,8 @@ struct Internal {
     momentum: AngVector,
 }
 
-fn internal(body: &Deformable) -> Internal {
+/// [`Internal`] of `body`, whose elastic energy is `elastic`.
+fn internal(body: &Deformable, elastic: Real) -> Internal {
     let (x, v, m) = (
         &body.state.positions,
         &body.state.velocities,
@@ -123,7 +124,7 @@ fn internal(body: &Deformable) -> Internal {
     Internal {
         centre_velocity,
         offsets,
-        energy: kinetic + body.elastic_energy(),
+        energy: kinetic + elastic,
         momentum,
     }
 }
@@ -146,7 +147,7 @@ pub(crate) fn begin(
             &mut body.state.velocities,
             body.step.scratch_velocities.clone(),
         );
-        let start = internal(body);
+        let start = internal(body, body.elastic_energy());
         body.state.velocities = saved;
         (start.energy, start.momentum)
     });
@@ -220,12 +221,14 @@ pub(crate) fn finish(body: &mut Deformable) {
         return;
     };
     let masses = &body.rest.masses;
-    let now = internal(body);
+    // The clip below changes only velocities: one evaluation of the elastic energy serves.
+    let elastic = body.elastic_energy();
+    let now = internal(body, elastic);
     let turn = math::angular_velocity_for(&now.offsets, masses, momentum - now.momentum);
     for (v, r) in body.state.velocities.iter_mut().zip(&now.offsets) {
         *v += math::ang_cross(turn, *r);
     }
-    let now = internal(body);
+    let now = internal(body, elastic);
     let state = &mut body.step.midpoint;
     // Energy given between the steps (an impulse) raises the budget.
     let budget = state.budget.map_or(energy, |b| b.max(energy));
