@@ -225,14 +225,21 @@ impl Integrate for Integrator {
         {
             // A body nothing touches: the midpoint step, or backward Euler if carrying its
             // motion on would flatten a cell.
-            let held = held_nodes(body, h, None);
-            let (theta, mid) = midpoint::begin(body, &held, None);
-            implicit_pass(body, g, theta * h, iterations, &mid, false, &mut Vec::new());
+            let free = vec![Hold::Free; body.num_nodes()];
+            let theta = midpoint::begin(body);
+            implicit_pass(
+                body,
+                g,
+                theta * h,
+                iterations,
+                &free,
+                false,
+                &mut Vec::new(),
+            );
             if !midpoint::keeps_cells(body, h, theta) {
-                let (_, end) = midpoint::begin(body, &held, Some(1.0));
-                implicit_pass(body, g, h, iterations, &end, false, &mut Vec::new());
+                midpoint::as_backward_euler(body);
+                implicit_pass(body, g, h, iterations, &free, false, &mut Vec::new());
             }
-            midpoint::solved(body);
             return;
         }
         body.step.midpoint.forget();

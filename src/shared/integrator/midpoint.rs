@@ -13,9 +13,9 @@
 //! 1 × 0.6 × 0.4 m box (E = 10⁶–10⁸ Pa, 2 sweeps, 60 Hz) tumbling or ringing gained 17 % to
 //! 10⁵-fold of its energy in 10 s, and its Gauss–Seidel sweeps, which do not conserve angular
 //! momentum, turned its spin by up to 90°. (Backward Euler's own unconverged step turned it by
-//! up to 38° and gained up to 49 %.) So a body that nothing outside touches in the step (no
-//! node bound to a bone or stopped by a contact) then gets back what no force of its own
-//! could have changed:
+//! up to 38° and gained up to 49 %.) So after each step the body (which nothing outside
+//! touches: a midpoint step is taken only then) gets back what no force of its own could have
+//! changed:
 //! 1. its angular momentum about its centre of mass (gravity exerts no torque there), exactly,
 //!    by a rigid rotation added to its velocities;
 //! 2. its internal energy (kinetic about the centre of mass, plus elastic), never above a
@@ -37,7 +37,7 @@
 
 use super::super::body::Deformable;
 use super::super::math::{self, AngVector, Real, Vector};
-use super::super::model::{Hold, MIN_STEP_VOLUME};
+use super::super::model::MIN_STEP_VOLUME;
 
 /// How far above its energy a free body's budget follows it down.
 pub(crate) const SLACK: Real = 0.02;
@@ -84,13 +84,9 @@ impl MidpointState {
 struct Pending {
     v0: Vec<Vector>,
     theta: Real,
-    /// Per node, whether the solve left it free (neither bound nor held by a contact).
-    free_nodes: Vec<bool>,
-    /// The velocities the solve gave (`v_θ`); a node a later contact pass changed keeps its
-    /// contact's velocity.
-    solved: Vec<Vector>,
-    /// For a body no bone holds: its internal energy and angular momentum at the start.
-    free: Option<(Real, AngVector)>,
+    /// The body's internal energy and angular momentum at the start.
+    energy: Real,
+    momentum: AngVector,
 }
 
 /// A body's motion about its centre of mass.
@@ -129,42 +125,28 @@ fn internal(body: &Deformable, elastic: Real) -> Internal {
     }
 }
 
-/// Starts a midpoint step of `body` from the velocities at the start of the step
-/// (`step.scratch_velocities`), its nodes held as `held` says at the step's end: returns the
-/// `θ` its backward-Euler solve is to take (`theta`, else the body's own), with the holds
-/// moved to `x_θ`.
-pub(crate) fn begin(
-    body: &mut Deformable,
-    held: &[Hold],
-    theta: Option<Real>,
-) -> (Real, Vec<Hold>) {
-    let theta = theta.unwrap_or(body.step.midpoint.theta);
-    body.step.midpoint.theta = theta;
-    let free_nodes: Vec<bool> = held.iter().map(|h| *h == Hold::Free).collect();
-    let untouched = body.bindings.len() == 0 && free_nodes.iter().all(|f| *f);
-    let free = untouched.then(|| {
-        let saved = std::mem::replace(
-            &mut body.state.velocities,
-            body.step.scratch_velocities.clone(),
-        );
-        let start = internal(body, body.elastic_energy());
-        body.state.velocities = saved;
-        (start.energy, start.momentum)
-    });
-    let x0 = &body.state.positions;
-    let held = held
-        .iter()
-        .zip(x0)
-        .map(|(h, x)| h.toward(*x, theta))
-        .collect();
+/// Starts a midpoint step of a body that nothing touches (no bone, no contact candidate),
+/// from its velocities at the start of the step: returns the `θ` its backward-Euler solve is
+/// to take.
+pub(crate) fn begin(body: &mut Deformable) -> Real {
+    let theta = body.step.midpoint.theta;
+    let start = internal(body, body.elastic_energy());
     body.step.midpoint.pending = Some(Pending {
-        v0: body.step.scratch_velocities.clone(),
+        v0: body.state.velocities.clone(),
         theta,
-        free_nodes,
-        solved: Vec::new(),
-        free,
+        energy: start.energy,
+        momentum: start.momentum,
     });
-    (theta, held)
+    theta
+}
+
+/// Makes the step under way backward Euler (`θ = 1`), for the solve to be taken again.
+pub(crate) fn as_backward_euler(body: &mut Deformable) {
+    let state = &mut body.step.midpoint;
+    state.theta = 1.0;
+    if let Some(p) = &mut state.pending {
+        p.theta = 1.0;
+    }
 }
 
 /// Whether carrying the solve's motion (the velocities, `v_θ`) on to the step's end keeps
@@ -186,13 +168,6 @@ pub(crate) fn keeps_cells(body: &Deformable, h: Real, theta: Real) -> bool {
     })
 }
 
-/// Records the velocities the step's solve gave.
-pub(crate) fn solved(body: &mut Deformable) {
-    if let Some(p) = &mut body.step.midpoint.pending {
-        p.solved.clone_from(&body.state.velocities);
-    }
-}
-
 /// Ends a midpoint step after the positions moved by `h v_θ`: the end velocities, then, for a
 /// free body, its angular momentum and energy kept (see the module docs). After a step
 /// [`begin`] did not start (another integrator's), the budget starts afresh.
@@ -202,24 +177,11 @@ pub(crate) fn finish(body: &mut Deformable) {
         return;
     };
     let theta = pending.theta;
-    for (i, (v, v0)) in body
-        .state
-        .velocities
-        .iter_mut()
-        .zip(&pending.v0)
-        .enumerate()
-    {
-        if pending.free_nodes[i] && pending.solved.get(i) == Some(v) {
-            *v = *v0 + (*v - *v0) / theta;
-        }
+    for (v, v0) in body.state.velocities.iter_mut().zip(&pending.v0) {
+        *v = *v0 + (*v - *v0) / theta;
     }
     body.state.elements.refit_rotations(&body.state.positions);
-    let state = &mut body.step.midpoint;
-    let Some((energy, momentum)) = pending.free else {
-        state.forget();
-        state.theta = (state.theta - RELAX).max(0.5);
-        return;
-    };
+    let (energy, momentum) = (pending.energy, pending.momentum);
     let masses = &body.rest.masses;
     // The clip below changes only velocities: one evaluation of the elastic energy serves.
     let elastic = body.elastic_energy();

@@ -200,35 +200,6 @@ impl Hold {
         }
     }
 
-    /// The hold at the fraction `theta` of the step from `x0` (the node's start): every
-    /// point it names moved to `x0 + θ (p − x0)` (the midpoint rule's `x_θ` of a node that
-    /// crosses the step at a uniform velocity).
-    pub(crate) fn toward(self, x0: Vector, theta: Real) -> Self {
-        let at = |p: Vector| x0 + (p - x0) * theta;
-        match self {
-            Hold::Free => Hold::Free,
-            Hold::At(p) => Hold::At(at(p)),
-            Hold::Above {
-                at: a,
-                normal,
-                target,
-            } => Hold::Above {
-                at: at(a),
-                normal,
-                target: at(target),
-            },
-            Hold::Contact {
-                target,
-                normal,
-                low,
-            } => Hold::Contact {
-                target: at(target),
-                normal,
-                low: at(low),
-            },
-        }
-    }
-
     /// A contact held where it was set.
     fn held(self) -> Self {
         match self {
