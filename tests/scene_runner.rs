@@ -502,8 +502,8 @@ fn advise_picks_the_cheapest_candidate_inside_the_bounds() {
     let lines = advise(&[
         "--dim", "2", "--trial", "crush", "--res", "3", "--mass", "10",
     ]);
-    // Five models explicitly, four implicitly with 2 and with 10 sweeps.
-    assert_eq!(lines.len(), 13);
+    // Five models explicitly, four by each implicit integrator with 2 and with 10 sweeps.
+    assert_eq!(lines.len(), 21);
     let passing: Vec<&Value> = lines
         .iter()
         .filter(|l| l["advise"]["rejected"].is_null())

@@ -59,6 +59,9 @@ pub(crate) struct MidpointState {
     budget: Option<Real>,
     /// The step under way.
     pending: Option<Pending>,
+    /// How long the body stays in the impact it is in (s; zero when in none:
+    /// `pipeline/impact.rs`).
+    pub impact: Real,
 }
 
 impl Default for MidpointState {
@@ -67,6 +70,7 @@ impl Default for MidpointState {
             theta: 0.5,
             budget: None,
             pending: None,
+            impact: 0.0,
         }
     }
 }

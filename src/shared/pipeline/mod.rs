@@ -39,6 +39,7 @@
 
 mod containment;
 mod finish;
+mod impact;
 mod islands;
 mod prepare;
 mod sleep;
@@ -511,7 +512,9 @@ fn step_group<'a>(
         && members
             .iter()
             .all(|m| !m.live || integrator.steps_together(m.body));
-    let integrator = if (soft || shares) && !together {
+    let integrator = if (soft || shares) && !together
+        || !(soft || shares) && impact::any(members, ctx, bodies)
+    {
         Integrator::Explicit
     } else {
         integrator
