@@ -28,6 +28,12 @@ fn two_soft_pads_lift_a_box_at_60_hz_without_slip() {
                 1.0 / 60.0,
                 Integrator::Implicit { iterations: 10 },
             ));
+            runs.push((
+                model,
+                0.1,
+                1.0 / 60.0,
+                Integrator::Midpoint { iterations: 10 },
+            ));
         }
     }
     for (model, mass, dt, integrator) in runs {

@@ -23,6 +23,8 @@
 //!    (`v += h (f/m + g)`, [`super::integrator`]); the bone drive ([`super::attach`]); contacts on
 //!    velocities, nodes against colliders then rigid features against surface facets
 //!    ([`super::contact`]); `x += h v`.
+//!    Under [`Integrator::Midpoint`] a body in an impact on a collider takes the explicit
+//!    step ([`impact`]).
 //! 4. **containment** ([`containment`]): a state that turned non-finite, or a cell stretched
 //!    past `max_stretch`, is rolled back to the start of the step with the rigid bodies it
 //!    pushed, and the body frozen; the surface's hierarchy is refitted to the final positions.
