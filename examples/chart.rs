@@ -233,6 +233,7 @@ fn sag(quick: bool) -> Vec<Point> {
         dts: &[1.0e-3],
         implicit: &[1.0 / 60.0],
         fem: &[4.0e-3],
+        midpoint: false,
     };
     sweep_with(
         SAG.key,
@@ -268,6 +269,7 @@ fn bending(quick: bool) -> Vec<Point> {
         } else {
             &[4.0e-3, 1.0 / 60.0]
         },
+        midpoint: false,
     };
     sweep_with(
         BENDING.key,
@@ -295,8 +297,9 @@ fn progress(what: &str) {
 }
 
 /// Who runs a sweep: every subject explicitly (rapier's bodies step their own way), and
-/// sinew's models but centroid springs implicitly with each of `sweeps`.
-fn entrants(sweeps: &[usize]) -> Vec<(Subject, Integrator, String)> {
+/// sinew's models but centroid springs implicitly with each of `sweeps` (by backward Euler, and
+/// with `midpoint` by the midpoint step too).
+fn entrants(sweeps: &[usize], midpoint: bool) -> Vec<(Subject, Integrator, String)> {
     let mut out: Vec<_> = Subject::all()
         .into_iter()
         .map(|s| (s, Integrator::Explicit, s.name().to_string()))
@@ -306,6 +309,10 @@ fn entrants(sweeps: &[usize]) -> Vec<(Subject, Integrator, String)> {
             if matches!(s, Subject::Sinew(m) if m != ElementModel::CentroidSprings) {
                 let label = format!("{} implicit {iterations}", s.name());
                 out.push((s, Integrator::Implicit { iterations }, label));
+                if midpoint {
+                    let label = format!("{} midpoint {iterations}", s.name());
+                    out.push((s, Integrator::Midpoint { iterations }, label));
+                }
             }
         }
     }
@@ -318,6 +325,9 @@ struct Steps<'a> {
     dts: &'a [Real],
     implicit: &'a [Real],
     fem: &'a [Real],
+    /// Whether the implicit entrants also run as `Integrator::Midpoint` (where the bounce or
+    /// the ring is what the sweep measures).
+    midpoint: bool,
 }
 
 impl Steps<'_> {
@@ -363,7 +373,7 @@ fn sweep_with(
     run: impl Fn(usize, Real, Subject, Integrator) -> (Record, Option<f64>),
 ) -> Vec<Point> {
     let mut out = Vec::new();
-    for (subject, integrator, label) in entrants(sweeps) {
+    for (subject, integrator, label) in entrants(sweeps, steps.midpoint) {
         for &res in resolutions {
             for &dt in steps.of(subject, integrator) {
                 progress(&format!("{metric} {label} res {res} dt {dt}"));
@@ -405,6 +415,7 @@ fn fall(quick: bool, reference: &FallReference) -> Vec<Point> {
         } else {
             &[4.0e-3, 8.0e-3, 1.0 / 60.0, 1.0 / 30.0]
         },
+        midpoint: true,
     };
     let sweeps: &[usize] = if quick { &[2] } else { &[2, 10] };
     sweep(FALL.key, resolutions, &steps, sweeps, |res, dt| {
@@ -455,11 +466,12 @@ fn crush(quick: bool) -> Vec<Point> {
         } else {
             &[1.0 / 60.0, 1.0 / 30.0]
         },
+        midpoint: false,
     };
     let sweeps: &[usize] = if quick { &[2] } else { &[2, 10] };
     let mass: Real = 10.0;
     let mut out = Vec::new();
-    for (subject, integrator, label) in entrants(sweeps) {
+    for (subject, integrator, label) in entrants(sweeps, steps.midpoint) {
         for &res in resolutions {
             for &dt in steps.of(subject, integrator) {
                 progress(&format!("crush {label} res {res} dt {dt}"));
@@ -515,6 +527,7 @@ fn heavy(quick: bool) -> (Vec<Point>, Vec<Point>) {
         } else {
             &[1.0 / 60.0, 1.0 / 30.0]
         },
+        midpoint: false,
     };
     let sweeps: &[usize] = if quick { &[2] } else { &[2, 10] };
     let crush = sweep(
@@ -555,6 +568,7 @@ fn vibration(quick: bool) -> (Vec<Point>, Vec<Point>) {
         } else {
             &[4.0e-3, 1.0 / 60.0, 1.0 / 30.0]
         },
+        midpoint: true,
     };
     let sweeps: &[usize] = if quick { &[2] } else { &[2, 10] };
     let damping = std::cell::RefCell::new(Vec::new());
@@ -603,6 +617,7 @@ fn stretch(quick: bool) -> (Vec<Point>, Vec<Point>) {
         dts,
         implicit: dts,
         fem: dts,
+        midpoint: false,
     };
     let sweeps: &[usize] = if quick { &[2] } else { &[2, 10] };
     let young = std::cell::RefCell::new(Vec::new());
