@@ -92,6 +92,7 @@ mod imp {
         check_state, Activation, Deformable, LastStep, Rest, State, StepBuffers, SurfaceTree,
     };
     use super::super::contact::{ContactMaterial, ContactPoint};
+    use super::super::integrator::{MidpointCarry, MidpointState};
     use super::super::material::{Material, Resolved, Stiffness};
     use super::super::math::{Real, Rotation, Vector};
     use super::super::mesh::{CellKind, Mesh};
@@ -156,6 +157,9 @@ mod imp {
         sleeping: bool,
         still_time: Real,
         user_data: u128,
+        /// The midpoint step's state between steps (absent in older snapshots).
+        #[serde(default)]
+        midpoint: Option<MidpointCarry>,
     }
 
     impl Serialize for Deformable {
@@ -183,6 +187,7 @@ mod imp {
                 sleeping: self.activation.sleeping,
                 still_time: self.activation.still_time,
                 user_data: self.user_data,
+                midpoint: Some(self.step.midpoint.carry()),
             }
             .serialize(s)
         }
@@ -244,13 +249,17 @@ mod imp {
                 velocities: self.velocities.into_owned(),
                 elements,
             };
+            let mut step = StepBuffers::new(
+                acc,
+                self.forces_valid,
+                self.limiter.unwrap_or(Real::INFINITY),
+                &state,
+            );
+            if let Some(carry) = self.midpoint {
+                step.midpoint = MidpointState::from_carry(carry)?;
+            }
             Ok(Deformable {
-                step: StepBuffers::new(
-                    acc,
-                    self.forces_valid,
-                    self.limiter.unwrap_or(Real::INFINITY),
-                    &state,
-                ),
+                step,
                 surface: SurfaceTree::build(&rest.mesh, &state.positions),
                 state,
                 rest,

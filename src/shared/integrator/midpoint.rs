@@ -62,6 +62,20 @@ pub(crate) struct MidpointState {
     /// How long the body stays in the impact it is in (s; zero when in none:
     /// `pipeline/impact.rs`).
     pub impact: Real,
+    /// The body closes fast on a collider but its explicit step was found too costly for the
+    /// impact: not asked again until it stops closing.
+    pub too_stiff: bool,
+}
+
+/// What of a body's [`MidpointState`] a snapshot keeps: all but the step under way (a
+/// snapshot is taken between steps).
+#[cfg(feature = "serde")]
+#[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub(crate) struct MidpointCarry {
+    theta: Real,
+    budget: Option<Real>,
+    impact: Real,
+    too_stiff: bool,
 }
 
 impl Default for MidpointState {
@@ -71,6 +85,7 @@ impl Default for MidpointState {
             budget: None,
             pending: None,
             impact: 0.0,
+            too_stiff: false,
         }
     }
 }
@@ -80,6 +95,34 @@ impl MidpointState {
     pub fn forget(&mut self) {
         self.budget = None;
         self.pending = None;
+    }
+
+    /// What a snapshot keeps.
+    #[cfg(feature = "serde")]
+    pub fn carry(&self) -> MidpointCarry {
+        MidpointCarry {
+            theta: self.theta,
+            budget: self.budget,
+            impact: self.impact,
+            too_stiff: self.too_stiff,
+        }
+    }
+
+    /// The state a snapshot kept, checked: `θ` in `[½, 1]`, a finite budget of at least zero,
+    /// an impact of zero to a second.
+    #[cfg(feature = "serde")]
+    pub fn from_carry(c: MidpointCarry) -> Result<Self, String> {
+        let budget_ok = c.budget.is_none_or(|b| b.is_finite() && b >= 0.0);
+        if !((0.5..=1.0).contains(&c.theta) && budget_ok && (0.0..=1.0).contains(&c.impact)) {
+            return Err(format!("midpoint step state out of range: {c:?}"));
+        }
+        Ok(MidpointState {
+            theta: c.theta,
+            budget: c.budget,
+            pending: None,
+            impact: c.impact,
+            too_stiff: c.too_stiff,
+        })
     }
 }
 

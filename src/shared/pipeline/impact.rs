@@ -13,14 +13,18 @@
 //!
 //! A body is in an impact from the step that starts with its centre of mass closing on a
 //! candidate collider faster than [`PipelineSettings::restitution_threshold`] plus twice what
-//! gravity adds in a step (a body resting on a floor closes on it by `g h` each step, which its
-//! contact takes back), the closing measured along the line from the collider's nearest point;
-//! it stays in it while closing and, once that stops, while it still touches a collider, for
-//! at most [`SETTLE`]. A body bound to a bone, in an island with other deformables, or whose
-//! explicit step would take more than [`MAX_SUBSTEPS`] substeps a step, keeps the midpoint
-//! step.
+//! gravity adds in a step, to the body and to a dynamic collider (a body resting on a floor,
+//! or a box resting on it, closes by `g h` each step, which the contact takes back), the
+//! closing measured along the line from the collider's point nearest to the centre of mass: a
+//! tumbling body whose corner strikes while its centre hardly closes is not in an impact. It
+//! stays in it while closing and, once that stops, while it still touches a collider, for at
+//! most [`SETTLE`]. A body bound to a bone, in an island with other deformables or with self
+//! contact on, stepped with [`PipelineSettings::fixed_substeps`], or whose explicit step would
+//! take more than [`MAX_SUBSTEPS`] substeps a step (or `max_substeps`) keeps the implicit step
+//! (backward Euler in the steps with contact candidates).
 //!
 //! [`PipelineSettings::restitution_threshold`]: super::PipelineSettings::restitution_threshold
+//! [`PipelineSettings::fixed_substeps`]: super::PipelineSettings::fixed_substeps
 //! [`Integrator::Midpoint`]: super::super::Integrator::Midpoint
 
 use super::super::integrator::Integrator;
@@ -35,7 +39,7 @@ pub(crate) const SETTLE: Real = 0.1;
 
 /// Most explicit substeps a step may take for an impact: a body stiffer than that for its
 /// mass and the step (the 10 cm silicone ball of `scenes ball`, E = 10⁶ Pa, takes 260 at
-/// 60 Hz) keeps the midpoint step through it.
+/// 60 Hz) keeps the implicit step through it.
 pub(crate) const MAX_SUBSTEPS: usize = 1000;
 
 /// Whether `members` (a group that neither touches itself nor shares a pushed body) take this
@@ -45,45 +49,69 @@ pub(super) fn any(
     ctx: &StepContext<'_>,
     bodies: &RigidBodySet,
 ) -> bool {
-    if !matches!(ctx.settings.integrator, Integrator::Midpoint { .. }) {
-        return false;
-    }
+    let settings = &ctx.settings;
+    let on = matches!(settings.integrator, Integrator::Midpoint { .. })
+        && settings.fixed_substeps.is_none();
+    let most = MAX_SUBSTEPS.min(settings.max_substeps) as Real;
     let mut any = false;
     for m in members.iter_mut() {
-        let body = &*m.body;
-        if !m.live || body.bindings.len() > 0 {
+        if !on || !m.live || m.body.bindings.len() > 0 {
+            leave(m);
             continue;
         }
-        let g = ctx.gravity * body.gravity_scale;
-        let threshold = ctx.settings.restitution_threshold + 2.0 * g.length() * ctx.dt;
-        let closing = closing_speed(m, ctx, bodies);
+        let g = ctx.gravity * m.body.gravity_scale;
+        let (closing, pull) = closing_speed(m, ctx, bodies);
+        let threshold = settings.restitution_threshold + 2.0 * (g.length() * ctx.dt + pull);
         let touching = !m.body.last.touching.is_empty();
-        let left = m.body.step.midpoint.impact;
-        // Whether the explicit step is affordable is asked once, as an impact starts.
-        let affordable = || {
-            let substep = ctx.settings.safety * m.body.stable_substep();
-            ctx.dt <= substep * MAX_SUBSTEPS as Real
-        };
-        let left = if closing > threshold && (left > 0.0 || affordable()) {
+        let state = &m.body.step.midpoint;
+        let (left, too_stiff) = (state.impact, state.too_stiff);
+        let mut refused = false;
+        let left = if closing > threshold && left <= 0.0 && !too_stiff {
+            // Whether the explicit step is affordable is asked once, as an impact starts.
+            let substep = settings.safety * m.body.stable_substep();
+            refused = ctx.dt > substep * most;
+            if refused {
+                0.0
+            } else {
+                SETTLE
+            }
+        } else if closing > threshold && left > 0.0 {
             SETTLE
         } else if touching {
             (left - ctx.dt).max(0.0)
         } else {
             0.0
         };
-        m.body.step.midpoint.impact = left;
+        let state = &mut m.body.step.midpoint;
+        state.impact = left;
+        state.too_stiff = (too_stiff || refused) && closing > threshold;
         any |= left > 0.0;
     }
     any
 }
 
+/// Ends the impact of each of `members`, for a step [`any`] does not decide (a group whose
+/// members may touch each other or share a pushed body).
+pub(super) fn end(members: &mut [Member<'_, '_>]) {
+    for m in members.iter_mut() {
+        leave(m);
+    }
+}
+
+fn leave(m: &mut Member<'_, '_>) {
+    let state = &mut m.body.step.midpoint;
+    state.impact = 0.0;
+    state.too_stiff = false;
+}
+
 /// The fastest a member's centre of mass closes on one of its candidate colliders, along the
-/// line from the collider's point nearest to it (`-∞` without candidates).
-fn closing_speed(m: &Member<'_, '_>, ctx: &StepContext<'_>, bodies: &RigidBodySet) -> Real {
+/// line from the collider's point nearest to it (`-∞` without candidates), and the speed
+/// gravity and user forces add to that collider's body along that line in a step.
+fn closing_speed(m: &Member<'_, '_>, ctx: &StepContext<'_>, bodies: &RigidBodySet) -> (Real, Real) {
     let centre = m.body.center_of_mass();
     let velocity = m.body.center_of_mass_velocity();
     let motions = &m.sc.broad.motions;
-    let mut fastest = Real::NEG_INFINITY;
+    let (mut fastest, mut pull) = (Real::NEG_INFINITY, 0.0);
     for cand in &m.candidates {
         let proj = cand
             .collider
@@ -96,7 +124,11 @@ fn closing_speed(m: &Member<'_, '_>, ctx: &StepContext<'_>, bodies: &RigidBodySe
         }
         let normal = away / length;
         let wall = cand.point_velocity(proj.point, 0.0, ctx.dt, motions, bodies);
-        fastest = fastest.max(-(velocity - wall).dot(normal));
+        let closing = -(velocity - wall).dot(normal);
+        if closing > fastest {
+            fastest = closing;
+            pull = cand.drift.dot(normal).abs();
+        }
     }
-    fastest
+    (fastest, pull)
 }

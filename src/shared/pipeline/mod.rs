@@ -514,9 +514,13 @@ fn step_group<'a>(
         && members
             .iter()
             .all(|m| !m.live || integrator.steps_together(m.body));
-    let integrator = if (soft || shares) && !together
-        || !(soft || shares) && impact::any(members, ctx, bodies)
-    {
+    let in_impact = if soft || shares {
+        impact::end(members);
+        false
+    } else {
+        impact::any(members, ctx, bodies)
+    };
+    let integrator = if (soft || shares) && !together || in_impact {
         Integrator::Explicit
     } else {
         integrator
