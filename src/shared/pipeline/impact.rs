@@ -5,11 +5,11 @@
 //! for a small or stiff body: one implicit step of a 60 Hz frame cannot resolve it. Backward
 //! Euler removes it (a ball thrown at a wall stuck to it), and the midpoint rule, whose contacts
 //! stop every node that the step's prediction carries past the collider, loses most of it: the
-//! 10 cm ball of issue 28 (E = 10⁵ Pa) thrown at 5 m/s left at 0.02–0.17 of its speed in one
-//! 60 Hz step, and came within 10 % of the 1 ms explicit run only with 32–64 midpoint substeps
-//! a frame (0.26–0.5 ms, 64 for E = 10⁶), about the explicit step's own substep. So the impact
-//! takes the explicit step, whose rebound is the reference, and the flight before and after it
-//! the midpoint step.
+//! 10 cm ball of `tests/shared/impact.rs` (E = 10⁵ Pa) thrown at 5 m/s left at 0.02–0.17 of its
+//! speed in one 60 Hz step, and came within 10 % of the 1 ms explicit run only with 32–64
+//! midpoint substeps a frame (0.26–0.5 ms, 64 for E = 10⁶), about the explicit step's own
+//! substep. So the impact takes the explicit step, whose rebound is the reference, and the
+//! flight before and after it the midpoint step.
 //!
 //! A body is in an impact from the step that starts with its centre of mass closing on a
 //! candidate collider faster than [`PipelineSettings::restitution_threshold`] plus twice what
