@@ -104,6 +104,8 @@ pub(crate) fn resolve_facet(
         weights,
         inv_masses: *inv_masses,
         target: vn - d / h,
+        bounce: 0.0,
+        found: vn,
         normal_impulse: 0.0,
         friction_impulse: Vector::ZERO,
         deferred: false,

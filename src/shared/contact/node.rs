@@ -125,6 +125,7 @@ pub(crate) fn resolve_node(
         // Never more than reverse the approach this impulse sees: no energy is created.
         target = target.min(-vn);
     }
+    let bounce = (target - vn_min).max(0.0);
     let mut nodes = [i; FACET_ARITY];
     let mut weights = [0.0; FACET_ARITY];
     let mut inv_masses = [0.0; FACET_ARITY];
@@ -140,6 +141,8 @@ pub(crate) fn resolve_node(
         weights,
         inv_masses,
         target,
+        bounce,
+        found: vn,
         normal_impulse: 0.0,
         friction_impulse: Vector::ZERO,
         deferred: false,

@@ -33,6 +33,10 @@ pub(crate) struct Contact {
     pub(super) inv_masses: [Real; FACET_ARITY],
     /// Normal velocity of the deformable relative to the collider to reach.
     pub(super) target: Real,
+    /// The part of `target` that is a bounce (restitution) rather than what closes the gap.
+    pub(super) bounce: Real,
+    /// The normal relative velocity when the contact was found.
+    pub(super) found: Real,
     pub(super) normal_impulse: Real,
     pub(super) friction_impulse: Vector,
     /// The dynamic body has not taken this contact's impulses yet: the deformable side alone
@@ -66,6 +70,25 @@ impl Contact {
             collider: candidates[self.candidate].handle,
             node,
         }
+    }
+
+    /// Whether the contact's target includes a bounce.
+    pub fn bounces(&self) -> bool {
+        self.bounce > 0.0
+    }
+
+    /// The velocity of a node contact's node, now `v`, once the contact is solved with `keep`
+    /// of its bounce and the node takes the whole change (an upper bound when a dynamic body
+    /// takes a share).
+    pub fn node_velocity(&self, v: Vector, keep: Real) -> Vector {
+        let target = self.target - self.bounce * (1.0 - keep);
+        v + self.normal * (target - self.found).max(0.0)
+    }
+
+    /// Keeps only `keep` (0–1) of the contact's bounce.
+    pub fn keep_bounce(&mut self, keep: Real) {
+        self.target -= self.bounce * (1.0 - keep);
+        self.bounce *= keep;
     }
 
     /// Leaves the dynamic body out of this contact's impulses until its block solve.

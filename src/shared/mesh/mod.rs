@@ -222,20 +222,26 @@ impl Mesh {
     /// Quality of cell `i` at `positions`: the volume ratio `V / V0` for simplices, the
     /// smallest corner-volume ratio for boxes. Zero or negative means collapsed or inverted.
     pub fn cell_quality(&self, i: usize, positions: &[Vector]) -> Real {
+        self.cell_quality_with(i, |n| positions[n as usize])
+    }
+
+    /// [`Self::cell_quality`] with each vertex's position given by `position` (of its node
+    /// index).
+    pub(crate) fn cell_quality_with(&self, i: usize, position: impl Fn(u32) -> Vector) -> Real {
         let c = self.cell(i);
         let a = c.len();
         match self.kind {
             CellKind::Simplex => {
                 let mut p = [Vector::ZERO; SIMPLEX_ARITY];
                 for (pj, &n) in p.iter_mut().zip(c) {
-                    *pj = positions[n as usize];
+                    *pj = position(n);
                 }
                 math::simplex_volume(&p) / self.rest_volumes[i]
             }
             CellKind::Cube => {
                 let mut p = [Vector::ZERO; CUBE_ARITY];
                 for (pj, &n) in p.iter_mut().zip(c) {
-                    *pj = positions[n as usize];
+                    *pj = position(n);
                 }
                 let rest = &self.rest_corners[i * a..(i + 1) * a];
                 (0..CUBE_ARITY)

@@ -10,6 +10,7 @@ use super::super::coupling::{BodyMotion, Substep};
 use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
 use super::super::math::{Real, Vector, FACET_ARITY};
 use super::super::mesh::Mesh;
+use super::super::model::edge_repulsion::CROSSING_FRACTION;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::set::DeformableHandle;
 use super::{timed, Broad, Candidates, Scratch, StageTimes, StepContext, Touch};
@@ -565,6 +566,7 @@ fn advance(
     let sharing = Sharing {
         split: !m.shares_bodies,
         defer: m.shares_bodies && !answers,
+        explicit: !answers,
     };
     // Velocities first (the contacts act on them), from the element forces and gravity.
     body.step
@@ -660,6 +662,7 @@ fn answered(m: &mut Member<'_, '_>, at: &Substep<'_>, bodies: &mut RigidBodySet,
     let sharing = Sharing {
         split: !m.shares_bodies,
         defer: false,
+        explicit: false,
     };
     let (stats, rows) = (&mut m.stats, &mut m.rigid_rows);
     timed(&mut m.times.contacts, || {
@@ -750,7 +753,7 @@ fn sweep_contacts(
     )
 }
 
-/// How a member meets the dynamic bodies it pushes.
+/// How a member's contacts act on the dynamic bodies it pushes, and on its own cells.
 #[derive(Copy, Clone, Debug)]
 struct Sharing {
     /// A body found over a node goes back out by its share: no other deformable may push it
@@ -758,6 +761,10 @@ struct Sharing {
     split: bool,
     /// The body takes the contacts' impulses in its block solve ([`rigid_passes`]), not at once.
     defer: bool,
+    /// The velocities the contacts leave move the nodes as they are (the explicit step; an
+    /// implicit one lets the body answer them first): a bounce is kept within the cells
+    /// ([`bounce_within_cells`]).
+    explicit: bool,
 }
 
 /// Every free surface node against its candidates; each contact found is solved at once.
@@ -825,6 +832,11 @@ fn node_contacts(
             x = keep_cells_upright(rest, &mut body.state.positions, k, (start, x));
         }
         body.state.positions[n_i] = x;
+        if sharing.explicit && c.bounces() {
+            let rest = (&body.rest.mesh, body.rest.near_facets());
+            let state = (&body.state.positions[..], &body.state.velocities[..]);
+            bounce_within_cells(&mut c, rest, state, k, at.h);
+        }
         if sharing.defer && candidates[c.candidate].dynamic {
             c.defer_body();
         }
@@ -877,6 +889,52 @@ fn keep_cells_upright(
     }
     x[node] = start;
     start
+}
+
+/// Keeps as much of contact `c`'s bounce as lets surface node `k` (an index into the boundary
+/// nodes) cover at most [`CROSSING_FRACTION`] of its height over each of its cells in the
+/// substep `h` (halving the bounce up to ten times, else dropping it), unless the cell closes
+/// faster without it: the crossing limiter chose `h` from the velocities before the contacts
+/// (`docs/ARCHITECTURE.md` §6.2).
+fn bounce_within_cells(
+    c: &mut Contact,
+    (mesh, near): (&Mesh, &NearFacets),
+    (x, v): (&[Vector], &[Vector]),
+    k: usize,
+    h: Real,
+) {
+    let node = mesh.boundary_nodes()[k];
+    let cells = near.cells_of_node(k);
+    let quality = |cell: u32, vi: Vector| {
+        let at = |n: u32| {
+            let velocity = if n == node { vi } else { v[n as usize] };
+            x[n as usize] + velocity * h
+        };
+        mesh.cell_quality_with(cell as usize, at)
+    };
+    let floors: Vec<Real> = cells
+        .iter()
+        .map(|&cell| {
+            let now = CROSSING_FRACTION * mesh.cell_quality(cell as usize, x);
+            now.min(quality(cell, c.node_velocity(v[node as usize], 0.0)))
+        })
+        .collect();
+    let mut keep = 1.0;
+    for _ in 0..=10 {
+        let vi = c.node_velocity(v[node as usize], keep);
+        if cells
+            .iter()
+            .zip(&floors)
+            .all(|(&cell, &floor)| quality(cell, vi) >= floor)
+        {
+            break;
+        }
+        keep *= 0.5;
+    }
+    if keep < 1.0 / 1024.0 {
+        keep = 0.0;
+    }
+    c.keep_bounce(keep);
 }
 
 /// Every surface facet against the point features of its candidates, the deepest crossing
