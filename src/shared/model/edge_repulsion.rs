@@ -53,7 +53,7 @@ pub const MATERIAL_SCALE: Real = if super::super::math::DIM == 3 {
 };
 
 /// Fraction of the remaining height a vertex may cover in one substep.
-pub const CROSSING_FRACTION: Real = 0.5;
+pub const CROSSING_FRACTION: Real = 0.1;
 
 /// Smallest height (relative to `h0`) at which the law is evaluated.
 pub const MIN_HEIGHT_RATIO: Real = 1e-6;

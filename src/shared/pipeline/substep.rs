@@ -10,7 +10,6 @@ use super::super::coupling::{BodyMotion, Substep};
 use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
 use super::super::math::{Real, Vector, FACET_ARITY};
 use super::super::mesh::Mesh;
-use super::super::model::edge_repulsion::CROSSING_FRACTION;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::set::DeformableHandle;
 use super::{timed, Broad, Candidates, Scratch, StageTimes, StepContext, Touch};
@@ -891,8 +890,11 @@ fn keep_cells_upright(
     start
 }
 
+/// Most of its height over a cell a node thrown back by a contact may cover in a substep.
+const BOUNCE_FRACTION: Real = 0.5;
+
 /// Keeps as much of contact `c`'s bounce as lets surface node `k` (an index into the boundary
-/// nodes) cover at most [`CROSSING_FRACTION`] of its height over each of its cells in the
+/// nodes) cover at most [`BOUNCE_FRACTION`] of its height over each of its cells in the
 /// substep `h` (halving the bounce up to ten times, else dropping it), unless the cell closes
 /// faster without it: the crossing limiter chose `h` from the velocities before the contacts
 /// (`docs/ARCHITECTURE.md` §6.2).
@@ -915,7 +917,7 @@ fn bounce_within_cells(
     let floors: Vec<Real> = cells
         .iter()
         .map(|&cell| {
-            let now = CROSSING_FRACTION * mesh.cell_quality(cell as usize, x);
+            let now = (1.0 - BOUNCE_FRACTION) * mesh.cell_quality(cell as usize, x);
             now.min(quality(cell, c.node_velocity(v[node as usize], 0.0)))
         })
         .collect();
