@@ -464,6 +464,19 @@ fn bad_arguments_are_errors_not_panics() {
 }
 
 #[test]
+fn help_goes_to_stdout_and_succeeds_and_a_bad_flag_exits_2() {
+    for argv in [&["scenes", "--help"][..], &["scenes", "fall", "--help"]] {
+        let e = cli::parse(argv).unwrap_err();
+        assert!(!e.use_stderr(), "{argv:?}");
+        assert_eq!(e.exit_code(), 0, "{argv:?}");
+        assert!(e.to_string().contains("Usage"), "{argv:?}");
+    }
+    let e = cli::parse(["scenes", "fall", "--bogus"]).unwrap_err();
+    assert!(e.use_stderr());
+    assert_eq!(e.exit_code(), 2);
+}
+
+#[test]
 fn the_stretch_scene_measures_poisson_s_ratio() {
     let lines = run(&[
         "stretch",

@@ -175,13 +175,24 @@ pub struct Args {
     pub min_volume: Option<f64>,
 }
 
+/// Parses `args` (the first is the program name). A request for help or the version comes
+/// back as an error too, which clap's `Error::exit` prints to stdout with status 0; a bad
+/// argument exits with status 2, as clap's own parsers do.
+pub fn parse<I, T>(args: I) -> Result<Args, clap::Error>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    Args::try_parse_from(args)
+}
+
 /// Parses `args` (the first is the program name), runs, and writes the output to `out`.
 pub fn run<I, T>(args: I, out: &mut dyn Write) -> Result<Vec<Record>, String>
 where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
-    let args = Args::try_parse_from(args).map_err(|e| e.to_string())?;
+    let args = parse(args).map_err(|e| e.to_string())?;
     if args.rrd.is_some() && !cfg!(feature = "rerun") {
         return Err("--rrd needs the rerun feature: cargo run --release --features rerun --example scenes -- ...".into());
     }

@@ -15,6 +15,11 @@ mod cli;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // Help, the version and bad arguments the way clap's parsers answer them: help on stdout
+    // with status 0, a usage error on stderr with status 2.
+    if let Err(e) = cli::parse(std::env::args_os()) {
+        e.exit();
+    }
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     match cli::run(std::env::args_os(), &mut out) {
