@@ -142,6 +142,11 @@ pub struct Args {
     /// is the shape-based element's rotation fit.)
     #[arg(long)]
     pub sweeps: Option<usize>,
+    /// Conjugate-gradient iterations of the implicit steps' Newton step over each whole body,
+    /// before the sweeps (`PipelineSettings::global_iterations`; cantilever and bending;
+    /// default 0: none).
+    #[arg(long)]
+    pub global: Option<usize>,
     /// Bodies of the pile, one run per count (default: 10).
     #[arg(long, num_args = 1..)]
     pub bodies: Vec<usize>,
@@ -1034,6 +1039,7 @@ macro_rules! dimension_runner {
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
                                 integrator: cube.integrator,
+                                global_iterations: args.global.unwrap_or(0),
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
@@ -1048,6 +1054,7 @@ macro_rules! dimension_runner {
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
                                 integrator: cube.integrator,
+                                global_iterations: args.global.unwrap_or(0),
                                 ..d
                             };
                             vec![scene.ring().map_err(err)?]

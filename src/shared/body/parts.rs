@@ -90,6 +90,8 @@ pub(crate) struct StepBuffers {
     pub soft_memory: Vec<Memory>,
     /// The implicit midpoint step's state ([`Integrator::Midpoint`](super::super::Integrator)).
     pub midpoint: MidpointState,
+    /// This step's [`PipelineSettings::global_iterations`](super::super::PipelineSettings::global_iterations).
+    pub global_iterations: usize,
 }
 
 impl StepBuffers {
@@ -103,6 +105,7 @@ impl StepBuffers {
             scratch_velocities: state.velocities.clone(),
             soft_memory: Vec::new(),
             midpoint: MidpointState::default(),
+            global_iterations: 0,
         }
     }
 }

@@ -48,6 +48,8 @@
 //! Springs, nonlinear springs, edge repulsion and shape matching have this step; centroid
 //! springs take the explicit one.
 
+mod global;
+
 use super::super::math::{self, Matrix, Real, Rotation, Vector, FACET_ARITY, SIMPLEX_ARITY};
 use super::edge_repulsion::{EdgeRepulsion, MIN_HEIGHT_RATIO, OPPOSITE};
 use super::hessian;
@@ -274,6 +276,9 @@ pub(crate) struct StepInput<'a> {
     pub gravity: Vector,
     pub h: Real,
     pub iterations: usize,
+    /// Conjugate-gradient iterations of a Newton step over the whole body before the sweeps
+    /// ([`global`]; 0: none).
+    pub global: usize,
 }
 
 impl ModelState {
@@ -307,6 +312,9 @@ impl ModelState {
         let Some(solve) = self.begin_implicit(input, x) else {
             return false;
         };
+        if input.global > 0 && solve.vertex.shape.is_none() {
+            solve.global_step(x, input.global);
+        }
         for sweep in 0..input.iterations {
             solve.sweep(x, sweep % 2 == 1, |_, _, _, _| {});
         }

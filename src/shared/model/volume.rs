@@ -58,6 +58,18 @@ impl Volume {
         out
     }
 
+    /// The scale of cell `cell`'s Gauss–Newton Hessian `κ V0/D0² ∇D ∇Dᵀ` (zero for a
+    /// negative `κ`, as in [`Volume::vertex_terms_at`]).
+    pub fn hessian_scale(&self, cell: usize) -> Real {
+        let d0 = self.d0[cell];
+        let k = self.k[cell] / (d0 * d0);
+        if k > 0.0 && k.is_finite() {
+            k
+        } else {
+            0.0
+        }
+    }
+
     /// The cells' vertex indices.
     pub fn cells(&self) -> &[u32] {
         &self.cells

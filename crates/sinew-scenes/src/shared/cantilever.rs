@@ -81,6 +81,9 @@ pub struct CantileverScene {
     pub fixed_substeps: Option<usize>,
     /// sinew's integrator.
     pub integrator: Integrator,
+    /// [`PipelineSettings::global_iterations`](sinew::dim3::PipelineSettings::global_iterations)
+    /// of sinew's implicit steps.
+    pub global_iterations: usize,
 }
 
 impl Default for CantileverScene {
@@ -105,6 +108,7 @@ impl Default for CantileverScene {
             seconds: 0.5,
             fixed_substeps: None,
             integrator: Integrator::Explicit,
+            global_iterations: 0,
         }
     }
 }
@@ -224,6 +228,7 @@ impl CantileverScene {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
+        world.pipeline.settings.global_iterations = self.global_iterations;
         world.physics.gravity = -UP * self.gravity;
         let bone = world
             .physics

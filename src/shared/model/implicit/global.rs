@@ -1,0 +1,577 @@
+//! A Newton step over the whole body, before the sweeps: the incremental potential's Newton
+//! system `H Δ = f` over every free node at once, `H` the sum of the same positive
+//! semi-definite term blocks the sweeps use ([`super::hessian`]) with their couplings between
+//! nodes, solved by conjugate gradients preconditioned by the nodes' own blocks, then cut
+//! back (halving) until every cell stays as upright as the sweeps' line search demands.
+//!
+//! Gauss–Seidel corrects a node against its neighbours: a mode of the whole body that is much
+//! softer than its cells (a slender beam's bending) converges by `1 − (m/h² + k_mode) /
+//! (m/h² + k_cell)` a sweep, nothing at all for a stiff beam at 60 Hz. Conjugate gradients
+//! resolve the soft end of the spectrum first.
+
+use super::super::super::math::{self, Matrix, Real, Vector, DIM, SIMPLEX_ARITY};
+use super::hessian;
+use super::{
+    cell_geometry, cell_upright, invert, unit, Hold, Law, Solve, MIN_HEIGHT_RATIO, MIN_STEP_VOLUME,
+};
+
+/// An edge-repulsion term's Gauss–Newton Hessian `k (s ⊗ g)(s ⊗ g)ᵀ`: at each vertex `a` of
+/// its cell, `∇_a h = s_a g / |g|`.
+struct Repulsion {
+    g: Vector,
+    k: Real,
+    shares: [Real; SIMPLEX_ARITY],
+}
+
+/// The incremental potential's Hessian at a state, kept as its terms for products.
+struct Terms<'a> {
+    inertia: Vec<Real>,
+    /// Spring pairs and their blocks (`[B −B; −B B]`), dashpots included.
+    springs: Vec<(usize, usize, Matrix)>,
+    /// Simplex cells of the repulsions and the volumetric term.
+    cells: &'a [u32],
+    /// [`SIMPLEX_ARITY`] per cell (edge repulsion only).
+    repulsions: Vec<Repulsion>,
+    /// Per cell: `∇D` and the volumetric term's `κ V0 / D0²`.
+    volumes: Vec<([Vector; SIMPLEX_ARITY], Real)>,
+    /// Shape-based cells: their vertices, arity, and `k + c/h`.
+    shape: Option<(&'a [u32], usize, Vec<Real>)>,
+}
+
+impl Terms<'_> {
+    /// `out = H v`.
+    fn product(&self, v: &[Vector], out: &mut [Vector]) {
+        for (o, (v, m)) in out.iter_mut().zip(v.iter().zip(&self.inertia)) {
+            *o = *v * *m;
+        }
+        for &(i, j, b) in &self.springs {
+            let d = b * (v[i] - v[j]);
+            out[i] += d;
+            out[j] -= d;
+        }
+        let a = SIMPLEX_ARITY;
+        for (c, ids) in self.cells.chunks_exact(a).enumerate() {
+            for r in self.repulsions.get(c * a..(c + 1) * a).unwrap_or(&[]) {
+                let t: Real = (0..a)
+                    .map(|k| r.shares[k] * r.g.dot(v[ids[k] as usize]))
+                    .sum();
+                for k in 0..a {
+                    out[ids[k] as usize] += r.g * (r.k * r.shares[k] * t);
+                }
+            }
+            if let Some((g, k)) = self.volumes.get(c) {
+                let t: Real = (0..a).map(|b| g[b].dot(v[ids[b] as usize])).sum();
+                for b in 0..a {
+                    out[ids[b] as usize] += g[b] * (k * t);
+                }
+            }
+        }
+        if let Some((cells, n, k)) = &self.shape {
+            for (c, ids) in cells.chunks_exact(*n).enumerate() {
+                let mean = ids.iter().map(|&i| v[i as usize]).sum::<Vector>() / *n as Real;
+                for &i in ids {
+                    out[i as usize] += (v[i as usize] - mean) * k[c];
+                }
+            }
+        }
+    }
+}
+
+fn dot(a: &[Vector], b: &[Vector]) -> Real {
+    a.iter().zip(b).map(|(a, b)| a.dot(*b)).sum()
+}
+
+/// Coarse unknowns per cluster: a translation and a linear map (`u = t + L x̃`).
+const COARSE: usize = DIM + DIM * DIM;
+
+/// Nodes per cluster of the coarse space, about.
+const CLUSTER_NODES: usize = 50;
+
+/// Most clusters.
+const MAX_CLUSTERS: usize = 32;
+
+/// A node's coarse row for a direction `g`: `Pᵢᵀ g` over its cluster's unknowns.
+fn coarse_row(g: Vector, offset: Vector) -> [f64; COARSE] {
+    let mut row = [0.0; COARSE];
+    for r in 0..DIM {
+        row[r] = g[r] as f64;
+        for c in 0..DIM {
+            row[DIM + r * DIM + c] = (g[r] * offset[c]) as f64;
+        }
+    }
+    row
+}
+
+/// Most clusters a term's nodes fall in.
+const TERM_CLUSTERS: usize = 8;
+
+/// A coarse vector touching a few clusters (at most [`TERM_CLUSTERS`]: a term's nodes).
+#[derive(Clone)]
+struct Sparse {
+    len: usize,
+    parts: [(usize, [f64; COARSE]); TERM_CLUSTERS],
+}
+
+impl Sparse {
+    fn new() -> Self {
+        Sparse {
+            len: 0,
+            parts: [(0, [0.0; COARSE]); TERM_CLUSTERS],
+        }
+    }
+
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    fn parts(&self) -> &[(usize, [f64; COARSE])] {
+        &self.parts[..self.len]
+    }
+
+    fn add(&mut self, cluster: usize, row: [f64; COARSE], scale: f64) {
+        if let Some((_, r)) = self.parts[..self.len]
+            .iter_mut()
+            .find(|(c, _)| *c == cluster)
+        {
+            r.iter_mut().zip(row).for_each(|(a, b)| *a += b * scale);
+        } else if self.len < TERM_CLUSTERS {
+            self.parts[self.len] = (cluster, row.map(|b| b * scale));
+            self.len += 1;
+        }
+    }
+}
+
+/// The body's nodes grouped by a grid over their positions, each group moving affinely: the
+/// coarse space in which a body's soft modes (bending, twisting, its motion as a whole) live.
+struct Coarse {
+    cluster: Vec<usize>,
+    offset: Vec<Vector>,
+    clusters: usize,
+    matrix: Vec<f64>,
+    factor: Option<Vec<f64>>,
+}
+
+impl Coarse {
+    fn new(x: &[Vector], free: &[bool]) -> Self {
+        let n = x.len();
+        let (mut lo, mut hi) = (x[0], x[0]);
+        for p in x {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        let extent = (hi - lo).max(Vector::splat(1e-9));
+        let target = (n / CLUSTER_NODES).clamp(1, MAX_CLUSTERS);
+        let volume: Real = (0..DIM).map(|d| extent[d]).product();
+        let mut size = (volume / target as Real).powf(1.0 / DIM as Real);
+        let mut cluster = vec![0; n];
+        let mut clusters;
+        loop {
+            let cells: Vec<usize> = (0..DIM)
+                .map(|d| ((extent[d] / size).ceil() as usize).max(1))
+                .collect();
+            let mut ids = std::collections::HashMap::new();
+            for (i, p) in x.iter().enumerate() {
+                let mut key = 0;
+                for d in (0..DIM).rev() {
+                    let k = (((p[d] - lo[d]) / size) as usize).min(cells[d] - 1);
+                    key = key * cells[d] + k;
+                }
+                let next = ids.len();
+                cluster[i] = *ids.entry(key).or_insert(next);
+            }
+            clusters = ids.len();
+            if clusters <= MAX_CLUSTERS {
+                break;
+            }
+            size *= 1.25;
+        }
+        let mut centre = vec![Vector::ZERO; clusters];
+        let mut count = vec![0.0; clusters];
+        for i in 0..n {
+            centre[cluster[i]] += x[i];
+            count[cluster[i]] += 1.0;
+        }
+        for (c, k) in centre.iter_mut().zip(&count) {
+            *c /= (*k as Real).max(1.0);
+        }
+        let offset = (0..n)
+            .map(|i| {
+                if free[i] {
+                    x[i] - centre[cluster[i]]
+                } else {
+                    Vector::ZERO
+                }
+            })
+            .collect();
+        let size = clusters * COARSE;
+        Coarse {
+            cluster,
+            offset,
+            clusters,
+            matrix: vec![0.0; size * size],
+            factor: None,
+        }
+    }
+
+    fn size(&self) -> usize {
+        self.clusters * COARSE
+    }
+
+    /// Adds `scale · u uᵀ`.
+    fn add_outer(&mut self, u: &Sparse, scale: f64) {
+        let size = self.size();
+        for (ca, ra) in u.parts() {
+            for (cb, rb) in u.parts() {
+                for (a, va) in ra.iter().enumerate() {
+                    let row = (ca * COARSE + a) * size + cb * COARSE;
+                    let s = va * scale;
+                    for (b, vb) in rb.iter().enumerate() {
+                        self.matrix[row + b] += s * vb;
+                    }
+                }
+            }
+        }
+    }
+
+    /// `Pᵀ g` of node `i` (nothing for a held node).
+    fn row(&self, i: usize, g: Vector, free: &[bool], scale: Real, into: &mut Sparse) {
+        if free[i] {
+            into.add(self.cluster[i], coarse_row(g, self.offset[i]), scale as f64);
+        }
+    }
+
+    /// Factors the matrix (Cholesky, with a small ridge for unknowns no free node moves).
+    fn factor(&mut self) {
+        let size = self.size();
+        let mut a = self.matrix.clone();
+        let ridge = (0..size).map(|i| a[i * size + i]).fold(0.0, f64::max) * 1e-9;
+        for i in 0..size {
+            a[i * size + i] += ridge.max(1e-300);
+        }
+        for j in 0..size {
+            let mut d = a[j * size + j];
+            for k in 0..j {
+                d -= a[j * size + k] * a[j * size + k];
+            }
+            if d.is_nan() || d <= 0.0 {
+                self.factor = None;
+                return;
+            }
+            let d = d.sqrt();
+            a[j * size + j] = d;
+            for i in j + 1..size {
+                let mut s = a[i * size + j];
+                for k in 0..j {
+                    s -= a[i * size + k] * a[j * size + k];
+                }
+                a[i * size + j] = s / d;
+            }
+        }
+        self.factor = Some(a);
+    }
+
+    /// `out += P A_c⁻¹ Pᵀ r`.
+    fn correct(&self, r: &[Vector], free: &[bool], out: &mut [Vector]) {
+        let Some(l) = &self.factor else {
+            return;
+        };
+        let size = self.size();
+        let mut b = vec![0.0f64; size];
+        for (i, ri) in r.iter().enumerate() {
+            if free[i] {
+                let row = coarse_row(*ri, self.offset[i]);
+                let base = self.cluster[i] * COARSE;
+                for (k, v) in row.iter().enumerate() {
+                    b[base + k] += v;
+                }
+            }
+        }
+        for i in 0..size {
+            let mut s = b[i];
+            for k in 0..i {
+                s -= l[i * size + k] * b[k];
+            }
+            b[i] = s / l[i * size + i];
+        }
+        for i in (0..size).rev() {
+            let mut s = b[i];
+            for k in i + 1..size {
+                s -= l[k * size + i] * b[k];
+            }
+            b[i] = s / l[i * size + i];
+        }
+        for (i, o) in out.iter_mut().enumerate() {
+            if free[i] {
+                let base = self.cluster[i] * COARSE;
+                let off = self.offset[i];
+                let mut u = Vector::ZERO;
+                for r in 0..DIM {
+                    let mut v = b[base + r];
+                    for c in 0..DIM {
+                        v += b[base + DIM + r * DIM + c] * off[c] as f64;
+                    }
+                    u[r] = v as Real;
+                }
+                *o += u;
+            }
+        }
+    }
+}
+
+impl Terms<'_> {
+    /// The coarse operator `Pᵀ H P` of these terms.
+    fn coarse(&self, coarse: &mut Coarse, free: &[bool]) {
+        let mut u = Sparse::new();
+        for (i, m) in self.inertia.iter().enumerate() {
+            for d in 0..DIM {
+                u.clear();
+                coarse.row(i, unit(d), free, 1.0, &mut u);
+                coarse.add_outer(&u, *m as f64);
+            }
+        }
+        let mut q = [Sparse::new(), Sparse::new(), Sparse::new()];
+        for &(i, j, b) in &self.springs {
+            // `Σ_rs B_rs q_r q_sᵀ`, `q_r = (Pᵢ − Pⱼ)ᵀ e_r`.
+            for (r, q) in q.iter_mut().enumerate().take(DIM) {
+                q.clear();
+                coarse.row(i, unit(r), free, 1.0, q);
+                coarse.row(j, unit(r), free, -1.0, q);
+            }
+            for r in 0..DIM {
+                for s in 0..DIM {
+                    let brs = b.col(s)[r];
+                    if brs != 0.0 {
+                        add_cross(coarse, &q[r], &q[s], brs as f64);
+                    }
+                }
+            }
+        }
+        let a = SIMPLEX_ARITY;
+        for (c, ids) in self.cells.chunks_exact(a).enumerate() {
+            for r in self.repulsions.get(c * a..(c + 1) * a).unwrap_or(&[]) {
+                u.clear();
+                for (&i, &share) in ids.iter().zip(&r.shares) {
+                    coarse.row(i as usize, r.g, free, share, &mut u);
+                }
+                coarse.add_outer(&u, r.k as f64);
+            }
+            if let Some((g, k)) = self.volumes.get(c) {
+                u.clear();
+                for b in 0..a {
+                    coarse.row(ids[b] as usize, g[b], free, 1.0, &mut u);
+                }
+                coarse.add_outer(&u, *k as f64);
+            }
+        }
+        if let Some((cells, n, k)) = &self.shape {
+            for (c, ids) in cells.chunks_exact(*n).enumerate() {
+                for d in 0..DIM {
+                    for &i in ids.iter() {
+                        u.clear();
+                        coarse.row(i as usize, unit(d), free, 1.0, &mut u);
+                        for &j in ids.iter() {
+                            coarse.row(j as usize, unit(d), free, -1.0 / *n as Real, &mut u);
+                        }
+                        coarse.add_outer(&u, k[c] as f64);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Adds `scale · u wᵀ`.
+fn add_cross(coarse: &mut Coarse, u: &Sparse, w: &Sparse, scale: f64) {
+    let size = coarse.size();
+    for (ca, ra) in u.parts() {
+        for (cb, rb) in w.parts() {
+            for (a, va) in ra.iter().enumerate() {
+                let row = (ca * COARSE + a) * size + cb * COARSE;
+                for (b, vb) in rb.iter().enumerate() {
+                    coarse.matrix[row + b] += scale * va * vb;
+                }
+            }
+        }
+    }
+}
+
+impl Solve<'_> {
+    /// The Hessian's terms at `x`.
+    fn terms(&self, x: &[Vector]) -> Terms<'_> {
+        let vertex = &self.vertex;
+        let h = self.h;
+        let inertia = self.masses.iter().map(|m| m / (h * h)).collect();
+        let mut springs = Vec::new();
+        if let Some(s) = vertex.springs {
+            for (k, &[a, b]) in s.pairs.iter().enumerate() {
+                let (i, j) = (a as usize, b as usize);
+                let d = x[i] - x[j];
+                let l = d.length();
+                if l <= Real::MIN_POSITIVE {
+                    continue;
+                }
+                let (du, ddu) = match s.law {
+                    Law::Linear => hessian::linear_spring(l, s.rest[k], s.k[k]),
+                    Law::Nonlinear => hessian::nonlinear_spring(l, s.rest[k], s.k[k]),
+                };
+                let n = d / l;
+                let block = hessian::radial_block(d, du, ddu) + math::outer(n, n) * (s.c[k] / h);
+                springs.push((i, j, block));
+            }
+        }
+        let mut cells: &[u32] = &[];
+        let mut repulsions = Vec::new();
+        let mut volumes = Vec::new();
+        if let Some(er) = vertex.er {
+            cells = &er.cells;
+            for cell in 0..er.cells.len() / SIMPLEX_ARITY {
+                let (d, g) = cell_geometry(er, vertex.incidence, cell, x);
+                for (b, gb) in g.iter().enumerate() {
+                    let g2 = gb.length_squared();
+                    if g2 <= Real::MIN_POSITIVE {
+                        repulsions.push(Repulsion {
+                            g: Vector::ZERO,
+                            k: 0.0,
+                            shares: [0.0; SIMPLEX_ARITY],
+                        });
+                        continue;
+                    }
+                    let slot = cell * SIMPLEX_ARITY + b;
+                    let (h0, k) = (er.h0[slot], er.k[slot]);
+                    let height = d / g2.sqrt();
+                    let q = h0 / height.max(MIN_HEIGHT_RATIO * h0);
+                    let shares =
+                        std::array::from_fn(|a| if a == b { 1.0 } else { g[a].dot(*gb) / g2 });
+                    repulsions.push(Repulsion {
+                        g: *gb,
+                        k: k * (1.0 + q * q) / g2,
+                        shares,
+                    });
+                }
+                if let Some(volume) = vertex.volume {
+                    volumes.push((g, volume.hessian_scale(cell)));
+                }
+            }
+        } else if let Some(volume) = vertex.volume {
+            cells = volume.cells();
+            for (cell, ids) in cells.chunks_exact(SIMPLEX_ARITY).enumerate() {
+                let p: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
+                let (_, g) = math::simplex_gradients(&p);
+                volumes.push((g, volume.hessian_scale(cell)));
+            }
+        }
+        let shape = vertex.shape.as_ref().map(|s| {
+            let n = s.cells.arity();
+            let ids = s.cells.cell_indices();
+            let k = (0..ids.len() / n)
+                .map(|c| {
+                    let (k, c) = s.cells.law(c);
+                    k + c / h
+                })
+                .collect();
+            (ids, n, k)
+        });
+        Terms {
+            inertia,
+            springs,
+            cells,
+            repulsions,
+            volumes,
+            shape,
+        }
+    }
+
+    /// Whether every cell upright at `from` is upright at `to` (the sweeps' line-search rule).
+    fn keeps_cells(&self, from: &[Vector], to: &[Vector]) -> bool {
+        let vertex = &self.vertex;
+        if let Some(er) = vertex.er {
+            let upright = |c, x: &[Vector]| cell_upright(er, vertex.incidence, c, x);
+            return (0..er.cells.len() / SIMPLEX_ARITY)
+                .all(|c| !upright(c, from) || upright(c, to));
+        }
+        if let Some(s) = &vertex.shape {
+            if s.cells.arity() == SIMPLEX_ARITY {
+                let n = s.cells.cell_indices().len() / SIMPLEX_ARITY;
+                let upright = |c, x: &[Vector]| s.cells.volume_ratio(c, x) > MIN_STEP_VOLUME;
+                return (0..n).all(|c| !upright(c, from) || upright(c, to));
+            }
+        }
+        true
+    }
+
+    /// One Newton step of the free nodes together from `x`, its linear system solved by at
+    /// most `iterations` preconditioned conjugate-gradient iterations (see the module docs).
+    /// Held nodes stay where they are.
+    pub fn global_step(&self, x: &mut [Vector], iterations: usize) {
+        let n = x.len();
+        if n == 0 {
+            return;
+        }
+        let h2 = self.h * self.h;
+        let free: Vec<bool> = self.held.iter().map(|h| *h == Hold::Free).collect();
+        let mut r = vec![Vector::ZERO; n];
+        let mut pre = vec![Matrix::ZERO; n];
+        for i in 0..n {
+            if free[i] {
+                let (f, block) = self.vertex.newton(i, x, self.masses[i] / h2, self.y[i]);
+                r[i] = f;
+                pre[i] = invert(block).unwrap_or(Matrix::ZERO);
+            }
+        }
+        let terms = self.terms(x);
+        let mut coarse = Coarse::new(x, &free);
+        terms.coarse(&mut coarse, &free);
+        coarse.factor();
+        let precondition = |r: &[Vector], z: &mut Vec<Vector>| {
+            z.clear();
+            z.extend(r.iter().zip(&pre).map(|(r, p)| *p * *r));
+            coarse.correct(r, &free, z);
+        };
+        let mut z = Vec::with_capacity(n);
+        precondition(&r, &mut z);
+        let mut p = z.clone();
+        let mut rz = dot(&r, &z);
+        let start = rz;
+        let mut step = vec![Vector::ZERO; n];
+        let mut hp = vec![Vector::ZERO; n];
+        for _ in 0..iterations {
+            if rz.is_nan() || rz <= 1e-12 * start {
+                break;
+            }
+            terms.product(&p, &mut hp);
+            for i in 0..n {
+                if !free[i] {
+                    hp[i] = Vector::ZERO;
+                }
+            }
+            let php = dot(&p, &hp);
+            if php.is_nan() || php <= 0.0 {
+                break;
+            }
+            let alpha = rz / php;
+            for i in 0..n {
+                step[i] += p[i] * alpha;
+                r[i] -= hp[i] * alpha;
+            }
+            precondition(&r, &mut z);
+            let next = dot(&r, &z);
+            let beta = next / rz;
+            rz = next;
+            for i in 0..n {
+                p[i] = z[i] + p[i] * beta;
+            }
+        }
+        let mut trial = x.to_vec();
+        let mut fraction = 1.0;
+        for _ in 0..=10 {
+            for i in 0..n {
+                trial[i] = x[i] + step[i] * fraction;
+            }
+            if trial.iter().all(|t| t.is_finite()) && self.keeps_cells(x, &trial) {
+                x.copy_from_slice(&trial);
+                return;
+            }
+            fraction *= 0.5;
+        }
+    }
+}
