@@ -26,8 +26,8 @@
 //!
 //! The normal velocity relative to the collider becomes `−e · (approach speed before this
 //! substep's force update)` when that approach is faster than the restitution threshold (a
-//! bounce; under the explicit step no more of it than keeps the node's cells upright over the
-//! substep, `docs/ARCHITECTURE.md` §6.2), else just what closes the gap (resting contact);
+//! bounce; under the explicit step no more of it than lets the node cover half its height in
+//! its cells over the substep, `docs/ARCHITECTURE.md` §6.2), else just what closes the gap (resting contact);
 //! friction is Coulomb's (it sticks when `μ` times the normal impulse is enough). `e` and `μ`
 //! combine the deformable's and the collider's coefficients with rapier's rules.
 //!

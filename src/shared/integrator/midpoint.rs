@@ -32,8 +32,12 @@
 //!    `½` by [`RELAX`] a step while they do not.
 //!
 //! The centre of mass moves exactly at `θ = ½` (the implicit step's best translation),
-//! gravity included; at `θ > ½` it ends `(θ − ½) h² g` low. A body bound to bones, a step in
-//! which a contact may act, and an island solved with its contacts take backward Euler.
+//! gravity included; at `θ > ½` it ends `(θ − ½) h² g` low. A step in which a contact may act,
+//! and an island solved with its contacts, take backward Euler; so does a body bound to bones
+//! unless it is solved whole (`PipelineSettings::global_iterations`): its bones do work and
+//! exert torques, so it keeps neither momentum nor an energy budget, and only a converged
+//! solve keeps its midpoint step stable. Its bound nodes are held where their bones are at
+//! `θ h`.
 
 use super::super::body::Deformable;
 use super::super::math::{self, AngVector, Real, Vector};
@@ -131,6 +135,8 @@ impl MidpointState {
 struct Pending {
     v0: Vec<Vector>,
     theta: Real,
+    /// No bone moves the body: its momentum and energy are its own to keep.
+    free: bool,
     /// The body's internal energy and angular momentum at the start.
     energy: Real,
     momentum: AngVector,
@@ -181,6 +187,7 @@ pub(crate) fn begin(body: &mut Deformable) -> Real {
     body.step.midpoint.pending = Some(Pending {
         v0: body.state.velocities.clone(),
         theta,
+        free: body.bindings.len() == 0,
         energy: start.energy,
         momentum: start.momentum,
     });
@@ -228,6 +235,11 @@ pub(crate) fn finish(body: &mut Deformable) {
         *v = *v0 + (*v - *v0) / theta;
     }
     body.state.elements.refit_rotations(&body.state.positions);
+    if !pending.free {
+        // Its bones do work and exert torques: nothing of its own to keep.
+        body.step.midpoint.budget = None;
+        return;
+    }
     let (energy, momentum) = (pending.energy, pending.momentum);
     let masses = &body.rest.masses;
     // The clip below changes only velocities: one evaluation of the elastic energy serves.

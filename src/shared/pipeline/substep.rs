@@ -897,7 +897,8 @@ const BOUNCE_FRACTION: Real = 0.5;
 /// nodes) cover at most [`BOUNCE_FRACTION`] of its height over each of its cells in the
 /// substep `h` (halving the bounce up to ten times, else dropping it), unless the cell closes
 /// faster without it: the crossing limiter chose `h` from the velocities before the contacts
-/// (`docs/ARCHITECTURE.md` §6.2).
+/// (`docs/ARCHITECTURE.md` §6.2). The node's velocity is taken with the whole normal change
+/// and without friction's tangential one.
 fn bounce_within_cells(
     c: &mut Contact,
     (mesh, near): (&Mesh, &NearFacets),
@@ -917,7 +918,8 @@ fn bounce_within_cells(
     let floors: Vec<Real> = cells
         .iter()
         .map(|&cell| {
-            let now = (1.0 - BOUNCE_FRACTION) * mesh.cell_quality(cell as usize, x);
+            let q = mesh.cell_quality(cell as usize, x);
+            let now = q - BOUNCE_FRACTION * q.abs();
             now.min(quality(cell, c.node_velocity(v[node as usize], 0.0)))
         })
         .collect();

@@ -12,7 +12,7 @@
 use super::super::super::math::{self, Matrix, Real, Vector, DIM, SIMPLEX_ARITY};
 use super::hessian;
 use super::{
-    cell_geometry, cell_upright, invert, unit, Hold, Law, Solve, MIN_HEIGHT_RATIO, MIN_STEP_VOLUME,
+    cell_geometry, cell_upright, height_ratio, invert, unit, Hold, Law, Solve, MIN_HEIGHT_RATIO,
 };
 
 /// An edge-repulsion term's Gauss–Newton Hessian `k (s ⊗ g)(s ⊗ g)ᵀ`: at each vertex `a` of
@@ -34,8 +34,6 @@ struct Terms<'a> {
     repulsions: Vec<Repulsion>,
     /// Per cell: `∇D` and the volumetric term's `κ V0 / D0²`.
     volumes: Vec<([Vector; SIMPLEX_ARITY], Real)>,
-    /// Shape-based cells: their vertices, arity, and `k + c/h`.
-    shape: Option<(&'a [u32], usize, Vec<Real>)>,
 }
 
 impl Terms<'_> {
@@ -63,14 +61,6 @@ impl Terms<'_> {
                 let t: Real = (0..a).map(|b| g[b].dot(v[ids[b] as usize])).sum();
                 for b in 0..a {
                     out[ids[b] as usize] += g[b] * (k * t);
-                }
-            }
-        }
-        if let Some((cells, n, k)) = &self.shape {
-            for (c, ids) in cells.chunks_exact(*n).enumerate() {
-                let mean = ids.iter().map(|&i| v[i as usize]).sum::<Vector>() / *n as Real;
-                for &i in ids {
-                    out[i as usize] += (v[i as usize] - mean) * k[c];
                 }
             }
         }
@@ -129,6 +119,7 @@ impl Sparse {
     }
 
     fn add(&mut self, cluster: usize, row: [f64; COARSE], scale: f64) {
+        debug_assert!(self.len < TERM_CLUSTERS || self.parts().iter().any(|p| p.0 == cluster));
         if let Some((_, r)) = self.parts[..self.len]
             .iter_mut()
             .find(|(c, _)| *c == cluster)
@@ -363,20 +354,6 @@ impl Terms<'_> {
                 coarse.add_outer(&u, *k as f64);
             }
         }
-        if let Some((cells, n, k)) = &self.shape {
-            for (c, ids) in cells.chunks_exact(*n).enumerate() {
-                for d in 0..DIM {
-                    for &i in ids.iter() {
-                        u.clear();
-                        coarse.row(i as usize, unit(d), free, 1.0, &mut u);
-                        for &j in ids.iter() {
-                            coarse.row(j as usize, unit(d), free, -1.0 / *n as Real, &mut u);
-                        }
-                        coarse.add_outer(&u, k[c] as f64);
-                    }
-                }
-            }
-        }
     }
 }
 
@@ -460,43 +437,30 @@ impl Solve<'_> {
                 volumes.push((g, volume.hessian_scale(cell)));
             }
         }
-        let shape = vertex.shape.as_ref().map(|s| {
-            let n = s.cells.arity();
-            let ids = s.cells.cell_indices();
-            let k = (0..ids.len() / n)
-                .map(|c| {
-                    let (k, c) = s.cells.law(c);
-                    k + c / h
-                })
-                .collect();
-            (ids, n, k)
-        });
         Terms {
             inertia,
             springs,
             cells,
             repulsions,
             volumes,
-            shape,
         }
     }
 
-    /// Whether every cell upright at `from` is upright at `to` (the sweeps' line-search rule).
+    /// Whether every edge-repulsion cell upright at `from` is upright at `to`, and none
+    /// flatter than that ends flatter (the sweeps' line-search rule).
     fn keeps_cells(&self, from: &[Vector], to: &[Vector]) -> bool {
         let vertex = &self.vertex;
-        if let Some(er) = vertex.er {
-            let upright = |c, x: &[Vector]| cell_upright(er, vertex.incidence, c, x);
-            return (0..er.cells.len() / SIMPLEX_ARITY)
-                .all(|c| !upright(c, from) || upright(c, to));
-        }
-        if let Some(s) = &vertex.shape {
-            if s.cells.arity() == SIMPLEX_ARITY {
-                let n = s.cells.cell_indices().len() / SIMPLEX_ARITY;
-                let upright = |c, x: &[Vector]| s.cells.volume_ratio(c, x) > MIN_STEP_VOLUME;
-                return (0..n).all(|c| !upright(c, from) || upright(c, to));
+        let Some(er) = vertex.er else {
+            return true;
+        };
+        let incidence = vertex.incidence;
+        (0..er.cells.len() / SIMPLEX_ARITY).all(|c| {
+            if cell_upright(er, incidence, c, from) {
+                cell_upright(er, incidence, c, to)
+            } else {
+                height_ratio(er, incidence, c, to) >= height_ratio(er, incidence, c, from)
             }
-        }
-        true
+        })
     }
 
     /// One Newton step of the free nodes together from `x`, its linear system solved by at
