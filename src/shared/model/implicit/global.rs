@@ -539,3 +539,101 @@ impl Solve<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::super::body::DeformableBuilder;
+    use super::super::super::super::mesh::CellKind;
+    use super::super::super::ElementModel;
+    use super::super::StepInput;
+    use super::*;
+
+    #[test]
+    fn the_coarse_operator_is_the_projection_of_the_operator() {
+        // Column by column, `Pᵀ (H (P e_k))` with `H` applied by the products the conjugate
+        // gradients use must equal the coarse matrix assembled term by term, on a sheared,
+        // squashed lattice with some nodes held.
+        for model in [ElementModel::EdgeRepulsion, ElementModel::Springs] {
+            let body = DeformableBuilder::cuboid(Vector::splat(0.5), [5; DIM])
+                .cells(CellKind::Simplex)
+                .model(model)
+                .build()
+                .unwrap();
+            let x0: Vec<Vector> = body
+                .state
+                .positions
+                .iter()
+                .map(|p| {
+                    let mut q = *p;
+                    q[1] *= 0.8;
+                    q[0] += 0.2 * p[1];
+                    q
+                })
+                .collect();
+            let n = x0.len();
+            let v0 = vec![Vector::ZERO; n];
+            let held: Vec<Hold> = (0..n)
+                .map(|i| {
+                    if i % 7 == 0 {
+                        Hold::At(x0[i])
+                    } else {
+                        Hold::Free
+                    }
+                })
+                .collect();
+            let input = StepInput {
+                x0: &x0,
+                v0: &v0,
+                masses: &body.rest.masses,
+                held: &held,
+                start: None,
+                gravity: Vector::ZERO,
+                h: 1.0 / 60.0,
+                iterations: 1,
+                global: 0,
+            };
+            let mut x = Vec::new();
+            let solve = body.state.elements.begin_implicit(&input, &mut x).unwrap();
+            let free: Vec<bool> = held.iter().map(|h| *h == Hold::Free).collect();
+            let terms = solve.terms(&x);
+            let mut coarse = Coarse::new(&x, &free);
+            assert!(coarse.clusters > 1, "{}", model.name());
+            terms.coarse(&mut coarse, &free);
+            let size = coarse.size();
+            let scale = coarse.matrix.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let mut hv = vec![Vector::ZERO; n];
+            for k in 0..size {
+                let (cluster, j) = (k / COARSE, k % COARSE);
+                let v: Vec<Vector> = (0..n)
+                    .map(|i| {
+                        if !free[i] || coarse.cluster[i] != cluster {
+                            return Vector::ZERO;
+                        }
+                        if j < DIM {
+                            unit(j)
+                        } else {
+                            let (r, c) = ((j - DIM) / DIM, (j - DIM) % DIM);
+                            unit(r) * coarse.offset[i][c]
+                        }
+                    })
+                    .collect();
+                terms.product(&v, &mut hv);
+                let mut column = vec![0.0f64; size];
+                for i in (0..n).filter(|&i| free[i]) {
+                    let row = coarse_row(hv[i], coarse.offset[i]);
+                    for (m, value) in row.iter().enumerate() {
+                        column[coarse.cluster[i] * COARSE + m] += value;
+                    }
+                }
+                for (row, expected) in column.iter().enumerate() {
+                    let got = coarse.matrix[row * size + k];
+                    assert!(
+                        (got - expected).abs() <= 1e-4 * scale,
+                        "{}: entry ({row}, {k}): {got} against {expected}",
+                        model.name()
+                    );
+                }
+            }
+        }
+    }
+}
