@@ -64,8 +64,8 @@ fn a_stiff_beam_rings_at_60_hz_under_the_implicit_step_solved_as_a_whole() {
     // E = 10⁸ Pa, 1 m × 0.1 m, res 5 (2.5 cm cells): a cell is ~10⁵ times stiffer than the
     // beam's bending, which Gauss–Seidel sweeps alone do not reach, so the beam hangs
     // straight. One Newton step over the whole beam (ten conjugate-gradient iterations) rings
-    // it: at 4.8–4.9 Hz under backward Euler (whose lag at ωh = 0.53 is 5 %), at 5.17–5.25 Hz
-    // under the midpoint step, against Euler–Bernoulli's 5.1; mean sag 12.9–13.9 mm, 14.9 in
+    // it: at 4.7–4.9 Hz under backward Euler (whose lag at ωh = 0.53 is 5 %), at 5.1–5.3 Hz
+    // under the midpoint step, against Euler–Bernoulli's 5.1; mean sag 12.7–13.9 mm, 14.9 in
     // theory.
     let implicit = Integrator::Implicit { iterations: 2 };
     let midpoint = Integrator::Midpoint { iterations: 2 };
@@ -74,6 +74,8 @@ fn a_stiff_beam_rings_at_60_hz_under_the_implicit_step_solved_as_a_whole() {
         (ElementModel::Springs, implicit, 0.1),
         (ElementModel::EdgeRepulsion, midpoint, 0.04),
         (ElementModel::Springs, midpoint, 0.04),
+        (ElementModel::SHAPE_MATCHING, implicit, 0.1),
+        (ElementModel::SHAPE_MATCHING, midpoint, 0.05),
     ] {
         let ring = |global_iterations| {
             CantileverScene {

@@ -312,7 +312,7 @@ impl ModelState {
         let Some(solve) = self.begin_implicit(input, x) else {
             return false;
         };
-        if input.global > 0 && solve.vertex.shape.is_none() {
+        if input.global > 0 {
             solve.global_step(x, input.global);
         }
         for sweep in 0..input.iterations {

@@ -106,9 +106,8 @@ pub struct PipelineSettings {
     /// (it hangs straight under the sweeps alone). 0, the default: the sweeps alone. Each
     /// iteration costs about a sweep, and each step also a dense Cholesky of at most 384
     /// unknowns (32 clusters of nodes, each moving affinely); 5–10 iterations converge the beam.
-    /// Springs, nonlinear springs and edge repulsion; shape matching (whose held rotations
-    /// would lock the bending) keeps the sweeps alone. A body bound to bones takes the midpoint
-    /// step only with it ([`Integrator::Midpoint`]).
+    /// Every model with an implicit step. A body bound to bones takes the midpoint step only
+    /// with it ([`Integrator::Midpoint`]).
     #[cfg_attr(feature = "serde", serde(default))]
     pub global_iterations: usize,
 }

@@ -1,18 +1,20 @@
-//! A Newton step over the whole body, before the sweeps: the incremental potential's Newton
-//! system `H Δ = f` over every free node at once, `H` the sum of the same positive
-//! semi-definite term blocks the sweeps use ([`super::hessian`]) with their couplings between
-//! nodes, solved by conjugate gradients preconditioned by the nodes' own blocks, then cut
-//! back (halving) until every cell stays as upright as the sweeps' line search demands.
+//! A Newton step over the whole body, before the sweeps (`docs/ARCHITECTURE.md` §4.2): the
+//! incremental potential's Newton system `H Δ = f` over every free node at once, `H` the sum
+//! of the same positive semi-definite term blocks the sweeps use ([`super::hessian`]) with
+//! their couplings between nodes (shape-based cells: see [`ShapeCells`]), solved by conjugate
+//! gradients with a two-level preconditioner — the nodes' own blocks, plus an exact solve in a
+//! coarse space of node clusters moving affinely ([`Coarse`]) — then cut back (halving) until
+//! every cell keeps the sweeps' line-search rule.
 //!
-//! Gauss–Seidel corrects a node against its neighbours: a mode of the whole body that is much
-//! softer than its cells (a slender beam's bending) converges by `1 − (m/h² + k_mode) /
-//! (m/h² + k_cell)` a sweep, nothing at all for a stiff beam at 60 Hz. Conjugate gradients
-//! resolve the soft end of the spectrum first.
+//! Gauss–Seidel corrects a node against its neighbours, so a mode of the whole body much
+//! softer than its cells (a slender beam's bending) converges by about
+//! `1 − (m/h² + k_mode)/(m/h² + k_cell)` a sweep; the coarse space holds such modes.
 
-use super::super::super::math::{self, Matrix, Real, Vector, DIM, SIMPLEX_ARITY};
+use super::super::super::math::{self, AngVector, Matrix, Real, Vector, DIM, SIMPLEX_ARITY};
 use super::hessian;
 use super::{
     cell_geometry, cell_upright, height_ratio, invert, unit, Hold, Law, Solve, MIN_HEIGHT_RATIO,
+    MIN_STEP_VOLUME,
 };
 
 /// An edge-repulsion term's Gauss–Newton Hessian `k (s ⊗ g)(s ⊗ g)ᵀ`: at each vertex `a` of
@@ -34,7 +36,47 @@ struct Terms<'a> {
     repulsions: Vec<Repulsion>,
     /// Per cell: `∇D` and the volumetric term's `κ V0 / D0²`.
     volumes: Vec<([Vector; SIMPLEX_ARITY], Real)>,
+    /// Shape-based cells (see [`ShapeCells`]).
+    shape: Option<ShapeCells<'a>>,
 }
+
+/// Shape-based cells for the Newton step: each cell's stiffness `k + c/h` on its vertices'
+/// offsets from the centroid, less the cell's infinitesimal rotations. The sweeps hold each
+/// cell's rotation over the step, which makes a turn of the cell cost like a strain; near its
+/// fit the true energy `k/2 Σ |r_a − R(x) R0_a|²` does not resist a turn (the fit follows
+/// it), so the Newton step takes `k (C − W (WᵀW)⁻¹ Wᵀ)`, `C` the centring and `W` the cell's
+/// turns `ω × r_a` (a slender beam's bending is mostly its cells turning).
+struct ShapeCells<'a> {
+    cells: &'a [u32],
+    arity: usize,
+    k: Vec<Real>,
+    /// Each vertex's offset from its cell's centroid, `arity` per cell.
+    offsets: Vec<Vector>,
+    /// `(WᵀW)⁻¹`'s columns, [`ANG_DIM`] per cell: the turn a unit moment about each axis gives.
+    turns: Vec<AngVector>,
+}
+
+/// Unit angular vectors, one per axis of rotation.
+fn turns() -> Vec<AngVector> {
+    (0..ANG_DIM)
+        .map(|d| {
+            let mut c = [0.0; 3];
+            c[d] = 1.0;
+            math::ang_from_components(c)
+        })
+        .collect()
+}
+
+/// Axes of rotation.
+const ANG_DIM: usize = math::TWIST_DIM - DIM;
+
+/// Component `e` of an angular vector.
+fn ang_component(w: AngVector, e: usize) -> Real {
+    math::twist_to_array(Vector::ZERO, w)[DIM + e]
+}
+
+/// Unit masses for a cell's turn (its vertices weigh the same in the shape-based energy).
+const ONES: [Real; 8] = [1.0; 8];
 
 impl Terms<'_> {
     /// `out = H v`.
@@ -61,6 +103,29 @@ impl Terms<'_> {
                 let t: Real = (0..a).map(|b| g[b].dot(v[ids[b] as usize])).sum();
                 for b in 0..a {
                     out[ids[b] as usize] += g[b] * (k * t);
+                }
+            }
+        }
+        if let Some(shape) = &self.shape {
+            let n = shape.arity;
+            for (c, ids) in shape.cells.chunks_exact(n).enumerate() {
+                let r = &shape.offsets[c * n..(c + 1) * n];
+                let mean = ids.iter().map(|&i| v[i as usize]).sum::<Vector>() / n as Real;
+                let moment = ids
+                    .iter()
+                    .zip(r)
+                    .map(|(&i, r)| math::cross(*r, v[i as usize]))
+                    .fold(math::ANG_ZERO, |s, m| s + m);
+                let inverse = &shape.turns[c * ANG_DIM..(c + 1) * ANG_DIM];
+                let turn = inverse
+                    .iter()
+                    .enumerate()
+                    .fold(math::ANG_ZERO, |w, (d, col)| {
+                        w + *col * ang_component(moment, d)
+                    });
+                for (&i, r) in ids.iter().zip(r) {
+                    let u = v[i as usize] - mean - math::ang_cross(turn, *r);
+                    out[i as usize] += u * shape.k[c];
                 }
             }
         }
@@ -354,6 +419,41 @@ impl Terms<'_> {
                 coarse.add_outer(&u, *k as f64);
             }
         }
+        if let Some(shape) = &self.shape {
+            let n = shape.arity;
+            let axes = turns();
+            let mut modes: Vec<Sparse> = vec![Sparse::new(); ANG_DIM];
+            for (c, ids) in shape.cells.chunks_exact(n).enumerate() {
+                let k = shape.k[c] as f64;
+                let r = &shape.offsets[c * n..(c + 1) * n];
+                // The centring `Σ_a P_aᵀ P_a − (Σ_a P_a)ᵀ (Σ_a P_a) / n`, axis by axis.
+                for d in 0..DIM {
+                    let mut sum = Sparse::new();
+                    for &i in ids {
+                        u.clear();
+                        coarse.row(i as usize, unit(d), free, 1.0, &mut u);
+                        coarse.add_outer(&u, k);
+                        coarse.row(i as usize, unit(d), free, 1.0, &mut sum);
+                    }
+                    coarse.add_outer(&sum, -k / n as f64);
+                }
+                for (mode, axis) in modes.iter_mut().zip(&axes) {
+                    mode.clear();
+                    for (&i, r) in ids.iter().zip(r) {
+                        coarse.row(i as usize, math::ang_cross(*axis, *r), free, 1.0, mode);
+                    }
+                }
+                for d in 0..ANG_DIM {
+                    let inverse = shape.turns[c * ANG_DIM + d];
+                    for (e, mode) in modes.iter().enumerate() {
+                        let m = ang_component(inverse, e) as f64;
+                        if m != 0.0 && m.is_finite() {
+                            add_cross(coarse, &modes[d], mode, -k * m);
+                        }
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -437,12 +537,47 @@ impl Solve<'_> {
                 volumes.push((g, volume.hessian_scale(cell)));
             }
         }
+        let shape = vertex.shape.as_ref().map(|s| {
+            let n = s.cells.arity();
+            let cells = s.cells.cell_indices();
+            let k = (0..cells.len() / n)
+                .map(|c| {
+                    let (k, c) = s.cells.law(c);
+                    k + c / h
+                })
+                .collect();
+            let mut offsets = Vec::with_capacity(cells.len());
+            let mut turns = Vec::with_capacity(cells.len() / n * ANG_DIM);
+            let axes = self::turns();
+            for ids in cells.chunks_exact(n) {
+                let centre = ids.iter().map(|&i| x[i as usize]).sum::<Vector>() / n as Real;
+                let start = offsets.len();
+                offsets.extend(ids.iter().map(|&i| x[i as usize] - centre));
+                let r = &offsets[start..];
+                turns.extend(axes.iter().map(|a| {
+                    let w = math::angular_velocity_for(r, &ONES[..n], *a);
+                    if math::ang_norm(w).is_finite() {
+                        w
+                    } else {
+                        math::ANG_ZERO
+                    }
+                }));
+            }
+            ShapeCells {
+                cells,
+                arity: n,
+                k,
+                offsets,
+                turns,
+            }
+        });
         Terms {
             inertia,
             springs,
             cells,
             repulsions,
             volumes,
+            shape,
         }
     }
 
@@ -450,6 +585,20 @@ impl Solve<'_> {
     /// flatter than that ends flatter (the sweeps' line-search rule).
     fn keeps_cells(&self, from: &[Vector], to: &[Vector]) -> bool {
         let vertex = &self.vertex;
+        if let Some(s) = &vertex.shape {
+            if s.cells.arity() != SIMPLEX_ARITY {
+                return true;
+            }
+            let cells = s.cells.cell_indices().len() / SIMPLEX_ARITY;
+            return (0..cells).all(|c| {
+                let (before, after) = (s.cells.volume_ratio(c, from), s.cells.volume_ratio(c, to));
+                if before > MIN_STEP_VOLUME {
+                    after > MIN_STEP_VOLUME
+                } else {
+                    after >= before
+                }
+            });
+        }
         let Some(er) = vertex.er else {
             return true;
         };
@@ -553,7 +702,11 @@ mod tests {
         // Column by column, `Pᵀ (H (P e_k))` with `H` applied by the products the conjugate
         // gradients use must equal the coarse matrix assembled term by term, on a sheared,
         // squashed lattice with some nodes held.
-        for model in [ElementModel::EdgeRepulsion, ElementModel::Springs] {
+        for model in [
+            ElementModel::EdgeRepulsion,
+            ElementModel::Springs,
+            ElementModel::SHAPE_MATCHING,
+        ] {
             let body = DeformableBuilder::cuboid(Vector::splat(0.5), [5; DIM])
                 .cells(CellKind::Simplex)
                 .model(model)
