@@ -376,7 +376,11 @@ impl Integrator {
             })
             .collect();
         terms.index(&nodes, |m, i| {
-            members[m].live && matches!(holds[m][i as usize], Hold::At(_) | Hold::Contact { .. })
+            members[m].live
+                && matches!(
+                    holds[m][i as usize],
+                    Hold::At(_) | Hold::Pressed(_) | Hold::Contact { .. }
+                )
         });
         // A member no collider stopped goes on from where its first sweep went; one that was
         // stopped starts afresh (as [`Integrate::after_contacts`] does).
@@ -530,7 +534,7 @@ fn held_nodes(body: &Deformable, h: Real, after: Option<AfterContacts<'_>>) -> V
                             low: at - normal * rise.min(off),
                         }
                     }
-                    None => Hold::At(at),
+                    None => Hold::Pressed(at),
                 },
                 _ => Hold::Free,
             }

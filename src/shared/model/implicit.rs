@@ -170,8 +170,15 @@ fn unit(d: usize) -> Vector {
 pub(crate) enum Hold {
     /// Free.
     Free,
-    /// Ends the step here (bound to a bone, or set by a contact on a facet).
+    /// Ends the step here (bound to a bone; what [`Hold::Pressed`] and [`Hold::Contact`]
+    /// become).
     At(Vector),
+    /// A node of a facet a rigid feature pressed, set to end the step here: held there
+    /// ([`Hold::At`]) or, if that leaves one of its cells too flat to start from, short of it
+    /// on the way from where it started the step (the feature then meets the cell's barrier
+    /// over the next steps; held where the feature took it, edge repulsion's cells under a
+    /// 20–100 kg box dropped at 60 Hz turned inside out).
+    Pressed(Vector),
     /// Ends the step at `at` or further along `normal`, its inertia drawing it to `target` (a
     /// node a collider stopped, or threw back to `target`: it may lift off further, so a cell of
     /// nodes all pressed onto a floor is not flattened with them, and its cells may hold it
@@ -196,16 +203,17 @@ impl Hold {
     fn at(self) -> Option<Vector> {
         match self {
             Hold::Free => None,
-            Hold::At(at) | Hold::Above { target: at, .. } | Hold::Contact { target: at, .. } => {
-                Some(at)
-            }
+            Hold::At(at)
+            | Hold::Pressed(at)
+            | Hold::Above { target: at, .. }
+            | Hold::Contact { target: at, .. } => Some(at),
         }
     }
 
     /// A contact held where it was set.
     fn held(self) -> Self {
         match self {
-            Hold::Contact { target, .. } => Hold::At(target),
+            Hold::Contact { target, .. } | Hold::Pressed(target) => Hold::At(target),
             other => other,
         }
     }
@@ -233,7 +241,7 @@ impl Hold {
     fn start(self, free: Vector, x0: Vector) -> Vector {
         match self {
             Hold::Free => free,
-            Hold::At(at) | Hold::Contact { target: at, .. } => at,
+            Hold::At(at) | Hold::Pressed(at) | Hold::Contact { target: at, .. } => at,
             Hold::Above { .. } => self.project(x0),
         }
     }
@@ -621,7 +629,30 @@ impl Start<'_> {
                 }
             }
         };
-        if lift(x, held) && (0..count).any(|c| !upright(c, x)) {
+        let lifted = lift(x, held);
+        // Pressed nodes of a cell still flat go back toward where they started the step,
+        // halving, until it is upright (or to the start).
+        for c in 0..count {
+            if upright(c, x) {
+                continue;
+            }
+            for &i in &cells[c * arity..(c + 1) * arity] {
+                let i = i as usize;
+                let Hold::Pressed(target) = self.given[i] else {
+                    continue;
+                };
+                let mut fraction: Real = 1.0;
+                while !upright(c, x) && fraction > 1.0 / 1024.0 {
+                    fraction *= 0.5;
+                    x[i] = self.x0[i] + (target - self.x0[i]) * fraction;
+                }
+                if !upright(c, x) {
+                    x[i] = self.x0[i];
+                }
+                held[i] = Hold::At(x[i]);
+            }
+        }
+        if lifted && (0..count).any(|c| !upright(c, x)) {
             for ((x, x0), held) in x.iter_mut().zip(self.x0).zip(held.iter()) {
                 if *held == Hold::Free {
                     *x = *x0;
