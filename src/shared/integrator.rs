@@ -150,7 +150,7 @@ pub enum Integrator {
     /// (E = 10⁸ Pa, 1000 kg/m³, 5 nodes across) hangs straight at 60 Hz even with 50 sweeps.
     /// [`PipelineSettings::global_iterations`](super::PipelineSettings::global_iterations)
     /// adds a Newton step over the whole body before the sweeps: with 10 it rings at 4.8 Hz
-    /// (Euler–Bernoulli: 5.1; shape matching 4.7) about 13.0–13.6 mm of sag (14.9), 50–60×
+    /// (Euler–Bernoulli: 5.1; shape matching 4.9) about 13.0–13.6 mm of sag (14.9), 50–60×
     /// cheaper than the explicit step.
     Implicit {
         /// Sweeps per step.
@@ -184,8 +184,8 @@ pub enum Integrator {
     /// 2–5 % of its size of the common reference (backward Euler: 44–48 %), at 3–6× less than
     /// the explicit step's cost; an impact's steps cost what the explicit step's do. With
     /// `global_iterations` 10, the clamped 10:1 cantilever of `scenes bending` (E = 10⁸ Pa,
-    /// res 5) rings at 5.19 Hz (edge repulsion; shape matching 5.31) against Euler–Bernoulli's
-    /// 5.11 (explicit at its own substeps: 5.33 and 5.43; backward Euler: 4.84 and 4.75).
+    /// res 5) rings at 5.19 Hz (edge repulsion; shape matching 5.29) against Euler–Bernoulli's
+    /// 5.11 (explicit at its own substeps: 5.33 and 5.43; backward Euler: 4.84 and 4.91).
     Midpoint {
         /// Sweeps per step.
         iterations: usize,

@@ -175,9 +175,8 @@ pub(crate) enum Hold {
     At(Vector),
     /// A node of a facet a rigid feature pressed, set to end the step here: held there
     /// ([`Hold::At`]) or, if that leaves one of its cells too flat to start from, short of it
-    /// on the way from where it started the step (the feature then meets the cell's barrier
-    /// over the next steps; held where the feature took it, edge repulsion's cells under a
-    /// 20–100 kg box dropped at 60 Hz turned inside out).
+    /// on the way from where it started the step, so that the feature meets the cell's
+    /// barrier over the next steps instead of carrying the node through the cell.
     Pressed(Vector),
     /// Ends the step at `at` or further along `normal`, its inertia drawing it to `target` (a
     /// node a collider stopped, or threw back to `target`: it may lift off further, so a cell of
@@ -317,11 +316,13 @@ impl ModelState {
         x: &mut Vec<Vector>,
         reactions: &mut Vec<Vector>,
     ) -> bool {
-        let Some(solve) = self.begin_implicit(input, x) else {
+        let Some(mut solve) = self.begin_implicit(input, x) else {
             return false;
         };
         if input.global > 0 {
             solve.global_step(x, input.global);
+            // The step turned shape-based cells: the sweeps' held rotations follow.
+            solve.refit_rotations(x);
         }
         for sweep in 0..input.iterations {
             solve.sweep(x, sweep % 2 == 1, |_, _, _, _| {});
@@ -484,6 +485,13 @@ impl Solve<'_> {
         }
     }
 
+    /// Refits the held rotations of shape-based cells at `x`.
+    pub fn refit_rotations(&mut self, x: &[Vector]) {
+        if let Some(shape) = &mut self.vertex.shape {
+            shape.cells.refit(x, &mut shape.rotations);
+        }
+    }
+
     /// Whether no node is held (the body may move as a whole).
     pub fn all_free(&self) -> bool {
         self.held.iter().all(|h| *h == Hold::Free)
@@ -589,7 +597,8 @@ struct Start<'a> {
 impl Start<'_> {
     /// Makes the start `x` one the line search can go on from, if a cell is too flat there
     /// (the held nodes moved through it): the contact nodes of such cells lift off (from where
-    /// they started the step), and of the cells that leaves flat in turn, then, if a cell
+    /// they started the step), and of the cells that leaves flat in turn; the pressed nodes of
+    /// those still flat are held short of their targets ([`Hold::Pressed`]); then, if a cell
     /// still is, the free nodes go back to where they started the step. (A 60 Hz ball bounced
     /// its bottom nodes up through the 2 cm layer above, still falling, and every move of its
     /// nodes was then refused.)
@@ -629,30 +638,39 @@ impl Start<'_> {
                 }
             }
         };
-        let lifted = lift(x, held);
-        // Pressed nodes of a cell still flat go back toward where they started the step,
-        // halving, until it is upright (or to the start).
-        for c in 0..count {
-            if upright(c, x) {
-                continue;
-            }
-            for &i in &cells[c * arity..(c + 1) * arity] {
-                let i = i as usize;
-                let Hold::Pressed(target) = self.given[i] else {
+        let any_flat = lift(x, held);
+        // The pressed nodes of each cell still flat go back together toward where they
+        // started the step, halving (a node's share of its target only ever shrinks), until
+        // no flat cell has one left to move.
+        let mut fraction: Vec<Real> = vec![1.0; x.len()];
+        loop {
+            let mut moved = false;
+            for c in 0..count {
+                if upright(c, x) {
                     continue;
-                };
-                let mut fraction: Real = 1.0;
-                while !upright(c, x) && fraction > 1.0 / 1024.0 {
-                    fraction *= 0.5;
-                    x[i] = self.x0[i] + (target - self.x0[i]) * fraction;
                 }
-                if !upright(c, x) {
-                    x[i] = self.x0[i];
+                for &i in &cells[c * arity..(c + 1) * arity] {
+                    let i = i as usize;
+                    let Hold::Pressed(target) = self.given[i] else {
+                        continue;
+                    };
+                    if fraction[i] == 0.0 {
+                        continue;
+                    }
+                    fraction[i] *= 0.5;
+                    if fraction[i] < 1.0 / 1024.0 {
+                        fraction[i] = 0.0;
+                    }
+                    x[i] = self.x0[i] + (target - self.x0[i]) * fraction[i];
+                    held[i] = Hold::At(x[i]);
+                    moved = true;
                 }
-                held[i] = Hold::At(x[i]);
+            }
+            if !moved {
+                break;
             }
         }
-        if lifted && (0..count).any(|c| !upright(c, x)) {
+        if any_flat && (0..count).any(|c| !upright(c, x)) {
             for ((x, x0), held) in x.iter_mut().zip(self.x0).zip(held.iter()) {
                 if *held == Hold::Free {
                     *x = *x0;

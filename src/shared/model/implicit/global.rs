@@ -581,8 +581,9 @@ impl Solve<'_> {
         }
     }
 
-    /// Whether every edge-repulsion cell upright at `from` is upright at `to`, and none
-    /// flatter than that ends flatter (the sweeps' line-search rule).
+    /// Whether every edge-repulsion cell (shape-based simplex cell) upright at `from` is
+    /// upright at `to`, and none flatter than that ends flatter (the sweeps' line-search
+    /// rule).
     fn keeps_cells(&self, from: &[Vector], to: &[Vector]) -> bool {
         let vertex = &self.vertex;
         if let Some(s) = &vertex.shape {
