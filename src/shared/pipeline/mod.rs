@@ -107,7 +107,9 @@ pub struct PipelineSettings {
     /// iteration costs about a sweep, and each step also a dense Cholesky of at most 384
     /// unknowns (32 clusters of nodes, each moving affinely); 5–10 iterations converge the beam.
     /// Every model with an implicit step. A body bound to bones takes the midpoint step only
-    /// with it ([`Integrator::Midpoint`]).
+    /// with it ([`Integrator::Midpoint`]). Not yet for bodies under heavy contact loads: with
+    /// it, `scenes advise --trial crush` (1000 kg on a soft cube) inverts edge-repulsion cells
+    /// under backward Euler, which hold without it (the midpoint step holds either way).
     #[cfg_attr(feature = "serde", serde(default))]
     pub global_iterations: usize,
 }
