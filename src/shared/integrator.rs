@@ -22,11 +22,28 @@ pub(crate) use midpoint::MidpointState;
 /// How long the next substep may be at the body's current state.
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct Bound {
-    /// The integrator's own stability bound (s), before the pipeline's safety factor.
+    /// The integrator's own stability bound (s) as estimated, before the pipeline's safety
+    /// factor.
     pub stable: Real,
+    /// A bound (s) the substep never exceeds whatever the safety factor: for the explicit
+    /// step, the uncalibrated per-node bound, which is rigorous.
+    pub certain: Real,
     /// The crossing limiter's bound (s): no node crosses its opposite facet's plane within it,
     /// whatever the integrator (infinite for models without one).
     pub limiter: Real,
+}
+
+impl Bound {
+    /// The stability bound under `safety`: the estimate times `safety`, never beyond the
+    /// certain bound; without `calibrated`, the certain bound times `safety`
+    /// (`docs/ARCHITECTURE.md` §4.1).
+    pub fn under(&self, safety: Real, calibrated: bool) -> Real {
+        if calibrated {
+            (safety * self.stable).min(self.certain)
+        } else {
+            safety * self.certain
+        }
+    }
 }
 
 /// What the contacts did, for [`Integrate::after_contacts`].
@@ -94,15 +111,19 @@ pub(crate) trait Integrate {
 }
 
 /// Symplectic (semi-implicit) Euler: `v += (f/m + g) h`, then `x += v h` in the loop. Stable
-/// below `2/ω` per node, damping included ([`model::stable_substep`]).
+/// below `2/ω` per node, damping included ([`model::stable_substeps`]).
 #[derive(Copy, Clone, Debug, Default)]
 pub(crate) struct SymplecticEuler;
 
 impl Integrate for SymplecticEuler {
     fn bound(&self, body: &Deformable) -> Bound {
         let acc = &body.step.acc;
+        let slack = body.rest.slack(&body.state.elements);
+        let (stable, certain) =
+            model::stable_substeps(&body.rest.masses, &acc.stiffness, &acc.damping, slack);
         Bound {
-            stable: model::stable_substep(&body.rest.masses, &acc.stiffness, &acc.damping),
+            stable,
+            certain,
             limiter: body.step.limiter,
         }
     }
@@ -223,6 +244,7 @@ impl Integrate for Integrator {
             // Unconditionally stable, and the line search keeps cells upright.
             Some(_) => Bound {
                 stable: Real::INFINITY,
+                certain: Real::INFINITY,
                 limiter: Real::INFINITY,
             },
             None => SymplecticEuler.bound(body),

@@ -67,7 +67,8 @@ impl DeformableWorld {
     ) -> Result<DeformableHandle, (Box<Deformable>, BuildError)> {
         let settings = self.pipeline.settings;
         let dt = self.physics.integration_parameters.dt;
-        let substep = deformable.stable_substep() * settings.safety;
+        let explicit = settings.integrator == super::integrator::Integrator::Explicit;
+        let substep = deformable.substep(settings.safety, explicit);
         let substeps = f64::from(dt) / f64::from(substep);
         let fits = substeps.partial_cmp(&(settings.max_substeps as f64))
             != Some(std::cmp::Ordering::Greater)

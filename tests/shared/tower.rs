@@ -112,7 +112,8 @@ fn an_edge_repulsion_tower_steps_explicitly_under_the_implicit_setting() {
 #[test]
 fn a_pile_collapsing_in_a_bowl_creates_no_energy() {
     // Ten cubes dropped in layers into a trimesh bowl at 60 Hz. Stepping a node out through
-    // the side face beside the one it lay on created 1–5 % of the pile's energy.
+    // the side face beside the one it lay on created 1–5 % of the pile's energy. Without it the
+    // largest rise is 0–0.3 % (3D edge repulsion at dt 1/50–1/200 s: the collapse is chaotic).
     let scene = PileScene {
         seconds: if DIM == 2 { 3.0 } else { 1.5 },
         ..Default::default()
@@ -120,7 +121,7 @@ fn a_pile_collapsing_in_a_bowl_creates_no_energy() {
     let r = scene.run().unwrap();
     assert!(!r.failed, "{:?}", r.failure);
     let gain = r.energy_gain.unwrap();
-    assert!(gain <= 2e-3, "the pile created {gain} of its energy");
+    assert!(gain <= 5e-3, "the pile created {gain} of its energy");
 }
 
 #[test]

@@ -42,14 +42,36 @@ pub struct Deformable {
 }
 
 impl Deformable {
-    /// The largest stable substep (s) at the current state, from the same bound the pipeline
-    /// uses before its `safety` factor: the state is not changed (a copy of the element state
-    /// is evaluated).
+    /// The largest stable substep (s) at the current state, as the pipeline estimates it before
+    /// its `safety` factor: the per-node stability bounds calibrated by how far they
+    /// overestimate this body's highest frequency at rest (`docs/ARCHITECTURE.md` §4.1). The
+    /// state is not changed (a copy of the element state is evaluated).
     pub fn stable_substep(&self) -> Real {
+        let (estimate, _, limiter) = self.bounds();
+        estimate.min(limiter)
+    }
+
+    /// The substep the pipeline takes at the current state under `safety`, calibrated or not
+    /// ([`Bound::under`](super::integrator::Bound::under)), never beyond the crossing limiter.
+    pub(crate) fn substep(&self, safety: Real, calibrated: bool) -> Real {
+        let (stable, certain, limiter) = self.bounds();
+        let bound = super::integrator::Bound {
+            stable,
+            certain,
+            limiter,
+        };
+        bound.under(safety, calibrated).min(limiter)
+    }
+
+    /// The calibrated and the uncalibrated stability bounds and the crossing limiter.
+    fn bounds(&self) -> (Real, Real, Real) {
         let mut state = self.state.elements.clone();
         let mut acc = Accumulator::new(self.state.positions.len());
         let limiter = state.accumulate(&self.state.positions, &self.state.velocities, &mut acc);
-        super::model::stable_substep(&self.rest.masses, &acc.stiffness, &acc.damping).min(limiter)
+        let slack = self.rest.slack(&self.state.elements);
+        let (estimate, certain) =
+            super::model::stable_substeps(&self.rest.masses, &acc.stiffness, &acc.damping, slack);
+        (estimate, certain, limiter)
     }
 
     /// The rest mesh.

@@ -9,9 +9,9 @@ use super::super::contact::soft_terms::Memory;
 use super::super::contact::ContactPoint;
 use super::super::integrator::MidpointState;
 use super::super::material::Resolved;
-use super::super::math::{Real, Vector};
+use super::super::math::{Real, Vector, DIM};
 use super::super::mesh::Mesh;
-use super::super::model::{Accumulator, ElementModel, ModelState};
+use super::super::model::{Accumulator, ElementModel, ModelState, Slack};
 use super::super::rapier::geometry::ColliderHandle;
 use super::super::report::DeformableReport;
 use super::super::set::DeformableHandle;
@@ -29,6 +29,9 @@ pub(crate) struct Rest {
     pub inv_masses: Vec<Real>,
     /// The facets each surface node leaves alone in self contact, made when first needed.
     near_facets: OnceLock<NearFacets>,
+    /// How far the node bounds overestimate the body's highest frequencies, measured when
+    /// first needed (a pure function of the rest mesh, model and material).
+    slack: OnceLock<Slack>,
 }
 
 impl Rest {
@@ -51,7 +54,19 @@ impl Rest {
             masses,
             inv_masses,
             near_facets: OnceLock::new(),
+            slack: OnceLock::new(),
         }
+    }
+
+    /// The slack of the stability bounds of `elements` (this body's model state), measured on
+    /// first use.
+    pub fn slack(&self, elements: &ModelState) -> Slack {
+        *self.slack.get_or_init(|| {
+            let volumes = self.mesh.rest_volumes();
+            let mean = volumes.iter().sum::<Real>() / volumes.len().max(1) as Real;
+            let cell_size = mean.powf(1.0 / DIM as Real);
+            Slack::measure(elements, self.mesh.nodes(), &self.masses, cell_size)
+        })
     }
 
     /// The facets each surface node leaves alone in self contact (its own and its

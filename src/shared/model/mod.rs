@@ -57,10 +57,13 @@ pub mod nonlinear_springs;
 #[cfg(feature = "parallel")]
 mod parallel;
 pub mod shape_matching;
+mod slack;
 pub mod springs;
 #[cfg(all(test, feature = "parallel"))]
 mod tests;
 pub mod volume;
+
+pub(crate) use slack::Slack;
 
 pub(crate) use implicit::{Hold, Solve, StepInput, MIN_STEP_VOLUME};
 
@@ -471,22 +474,32 @@ pub(crate) fn reduced_mass(a: Real, b: Real) -> Real {
     a * b / (a + b)
 }
 
-/// Largest stable symplectic-Euler substep for the given per-node bounds (the masses and the
+/// Largest stable symplectic-Euler substeps for the given per-node bounds (the masses and the
 /// Gershgorin stiffness and damping bounds the force loops accumulate): the smallest over the
-/// nodes of `2/ω (√(1+ζ²) − ζ)`, `ω² = stiffness/m`, `ζ = damping / (2 √(stiffness · m))`.
-pub(crate) fn stable_substep(masses: &[Real], stiffness: &[Real], damping: &[Real]) -> Real {
-    let mut h = Real::INFINITY;
-    for ((m, s), d) in masses.iter().zip(stiffness).zip(damping) {
-        let hi = if *s > 0.0 {
+/// nodes of `2/ω (√(1+ζ²) − ζ)`, `ω² = stiffness/m`, `ζ = damping / (2 √(stiffness · m))`,
+/// first with each node's bounds divided by the body's [`Slack`] (the estimate), then as they
+/// are (certain: the bounds are rigorous). Returns `(estimate, certain)`.
+pub(crate) fn stable_substeps(
+    masses: &[Real],
+    stiffness: &[Real],
+    damping: &[Real],
+    slack: Slack,
+) -> (Real, Real) {
+    let node = |m: Real, s: Real, d: Real| {
+        if s > 0.0 {
             let omega = (s / m).sqrt();
             let zeta = d / (2.0 * (s * m).sqrt());
             2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
-        } else if *d > 0.0 {
+        } else if d > 0.0 {
             2.0 * m / d
         } else {
-            continue;
-        };
-        h = h.min(hi);
+            Real::INFINITY
+        }
+    };
+    let (mut estimate, mut certain) = (Real::INFINITY, Real::INFINITY);
+    for ((m, s), d) in masses.iter().zip(stiffness).zip(damping) {
+        estimate = estimate.min(node(*m, s / slack.stiffness, d / slack.damping));
+        certain = certain.min(node(*m, *s, *d));
     }
-    h
+    (estimate, certain)
 }

@@ -68,7 +68,7 @@ pub(super) fn any(
         let mut refused = false;
         let left = if closing > threshold && left <= 0.0 && !too_stiff {
             // Whether the explicit step is affordable is asked once, as an impact starts.
-            let substep = settings.safety * m.body.stable_substep();
+            let substep = m.body.substep(settings.safety, false);
             refused = ctx.dt > substep * most;
             if refused {
                 0.0

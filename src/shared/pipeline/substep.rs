@@ -7,7 +7,7 @@ use super::super::contact::soft::{self, NearFacets};
 use super::super::contact::soft_terms;
 use super::super::contact::{self, Contact, FacetMotion, FreeNode};
 use super::super::coupling::{BodyMotion, Substep};
-use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
+use super::super::integrator::{AfterContacts, Bound, Integrate, Integrator, Together};
 use super::super::math::{Real, Vector, FACET_ARITY};
 use super::super::mesh::Mesh;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
@@ -35,10 +35,11 @@ pub(super) struct SubstepStats {
     pub self_contacts: usize,
 }
 
-/// The substep size at the current state's bound, or `None` when the body is out of substeps
-/// (`stats` says so).
+/// The substep size at the current state's bound (its calibrated estimate unless
+/// `calibrated` is false), or `None` when the body is out of substeps (`stats` says so).
 fn substep_size(
     bound: Bound,
+    calibrated: bool,
     ctx: &StepContext<'_>,
     remaining: Real,
     stats: &mut SubstepStats,
@@ -47,7 +48,7 @@ fn substep_size(
     if let Some(k) = settings.fixed_substeps {
         return Some(ctx.dt / k.max(1) as Real);
     }
-    let stable = settings.safety * bound.stable;
+    let stable = bound.under(settings.safety, calibrated);
     let limiter = bound.limiter;
     let bound = stable.min(limiter);
     if limiter < stable {
@@ -522,12 +523,18 @@ fn next_substep(
     }
     let mut h = Real::INFINITY;
     let mut out = false;
+    // Contacts lose accuracy with the substep (ARCHITECTURE §4.1): surfaces that may meet each
+    // other or themselves, and an implicit integrator's impacts taken explicitly, keep the
+    // uncalibrated bound.
+    let alone = members.len() == 1 && ctx.settings.integrator == Integrator::Explicit;
     for &i in live {
         let m = &mut members[i];
         if integrator.uses_forces(m.body) {
             timed(&mut m.times.forces, || m.body.refresh_forces());
         }
-        match substep_size(integrator.bound(m.body), ctx, remaining, &mut m.stats) {
+        let calibrated = alone && !m.body.self_contact();
+        let bound = integrator.bound(m.body);
+        match substep_size(bound, calibrated, ctx, remaining, &mut m.stats) {
             Some(hi) => h = h.min(hi),
             None => out = true,
         }
