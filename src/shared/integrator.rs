@@ -34,15 +34,9 @@ pub(crate) struct Bound {
 }
 
 impl Bound {
-    /// The stability bound under `safety`: the estimate times `safety`, never beyond the
-    /// certain bound; without `calibrated`, the certain bound times `safety`
-    /// (`docs/ARCHITECTURE.md` §4.1).
+    /// The stability bound under `safety` ([`model::substep_under`]).
     pub fn under(&self, safety: Real, calibrated: bool) -> Real {
-        if calibrated {
-            (safety * self.stable).min(self.certain)
-        } else {
-            safety * self.certain
-        }
+        model::substep_under(self.stable, self.certain, safety, calibrated)
     }
 }
 

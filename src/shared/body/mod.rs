@@ -52,15 +52,10 @@ impl Deformable {
     }
 
     /// The substep the pipeline takes at the current state under `safety`, calibrated or not
-    /// ([`Bound::under`](super::integrator::Bound::under)), never beyond the crossing limiter.
+    /// ([`substep_under`](super::model::substep_under)), never beyond the crossing limiter.
     pub(crate) fn substep(&self, safety: Real, calibrated: bool) -> Real {
-        let (stable, certain, limiter) = self.bounds();
-        let bound = super::integrator::Bound {
-            stable,
-            certain,
-            limiter,
-        };
-        bound.under(safety, calibrated).min(limiter)
+        let (estimate, certain, limiter) = self.bounds();
+        super::model::substep_under(estimate, certain, safety, calibrated).min(limiter)
     }
 
     /// The calibrated and the uncalibrated stability bounds and the crossing limiter.

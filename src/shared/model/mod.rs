@@ -503,3 +503,14 @@ pub(crate) fn stable_substeps(
     }
     (estimate, certain)
 }
+
+/// The substep under `safety` from the bounds of [`stable_substeps`]: the estimate times
+/// `safety`, never beyond the certain bound; without `calibrated`, the certain bound times
+/// `safety` (`docs/ARCHITECTURE.md` §4.1).
+pub(crate) fn substep_under(estimate: Real, certain: Real, safety: Real, calibrated: bool) -> Real {
+    if calibrated {
+        (safety * estimate).min(certain)
+    } else {
+        safety * certain
+    }
+}
