@@ -52,8 +52,9 @@ pub(crate) struct AfterContacts<'a> {
 
 /// One way of advancing a body's velocities over a substep.
 pub(crate) trait Integrate {
-    /// The bound at the current state; the element forces are current when it is called.
-    fn bound(&self, body: &Deformable) -> Bound;
+    /// The bound at the current state, its estimate calibrated by the body's slack if
+    /// `calibrated` (else the certain bound); the element forces are current when it is called.
+    fn bound(&self, body: &Deformable, calibrated: bool) -> Bound;
 
     /// Advances every node's velocity over `h` under the element forces and gravity `g`
     /// (bones and contacts come after, in the loop; `contacts_follow` when the body has
@@ -110,9 +111,13 @@ pub(crate) trait Integrate {
 pub(crate) struct SymplecticEuler;
 
 impl Integrate for SymplecticEuler {
-    fn bound(&self, body: &Deformable) -> Bound {
+    fn bound(&self, body: &Deformable, calibrated: bool) -> Bound {
         let acc = &body.step.acc;
-        let slack = body.rest.slack(&body.state.elements);
+        let slack = if calibrated {
+            body.rest.slack(&body.state.elements)
+        } else {
+            model::Slack::NONE
+        };
         let (stable, certain) =
             model::stable_substeps(&body.rest.masses, &acc.stiffness, &acc.damping, slack);
         Bound {
@@ -233,7 +238,7 @@ impl Integrator {
 }
 
 impl Integrate for Integrator {
-    fn bound(&self, body: &Deformable) -> Bound {
+    fn bound(&self, body: &Deformable, calibrated: bool) -> Bound {
         match self.implicit_for(body) {
             // Unconditionally stable, and the line search keeps cells upright.
             Some(_) => Bound {
@@ -241,7 +246,7 @@ impl Integrate for Integrator {
                 certain: Real::INFINITY,
                 limiter: Real::INFINITY,
             },
-            None => SymplecticEuler.bound(body),
+            None => SymplecticEuler.bound(body, calibrated),
         }
     }
 

@@ -42,28 +42,33 @@ pub struct Deformable {
 }
 
 impl Deformable {
-    /// The largest stable substep (s) at the current state, as the pipeline estimates it before
-    /// its `safety` factor: the per-node stability bounds calibrated by how far they
-    /// overestimate this body's highest frequency at rest (`docs/ARCHITECTURE.md` §4.1). The
-    /// state is not changed (a copy of the element state is evaluated).
+    /// The largest stable substep (s) at the current state, before the pipeline's `safety`
+    /// factor: the per-node stability bounds calibrated by how far they overestimate this
+    /// body's highest frequency at rest (`docs/ARCHITECTURE.md` §4.1; the pipeline uses the
+    /// calibration for a body the explicit integrator steps alone), and the crossing limiter.
+    /// The state is not changed (a copy of the element state is evaluated).
     pub fn stable_substep(&self) -> Real {
-        let (estimate, _, limiter) = self.bounds();
+        let (estimate, _, limiter) = self.bounds(true);
         estimate.min(limiter)
     }
 
     /// The substep the pipeline takes at the current state under `safety`, calibrated or not
     /// ([`substep_under`](super::model::substep_under)), never beyond the crossing limiter.
     pub(crate) fn substep(&self, safety: Real, calibrated: bool) -> Real {
-        let (estimate, certain, limiter) = self.bounds();
+        let (estimate, certain, limiter) = self.bounds(calibrated);
         super::model::substep_under(estimate, certain, safety, calibrated).min(limiter)
     }
 
-    /// The calibrated and the uncalibrated stability bounds and the crossing limiter.
-    fn bounds(&self) -> (Real, Real, Real) {
+    /// The stability bounds (calibrated if asked, and as they are) and the crossing limiter.
+    fn bounds(&self, calibrated: bool) -> (Real, Real, Real) {
         let mut state = self.state.elements.clone();
         let mut acc = Accumulator::new(self.state.positions.len());
         let limiter = state.accumulate(&self.state.positions, &self.state.velocities, &mut acc);
-        let slack = self.rest.slack(&self.state.elements);
+        let slack = if calibrated {
+            self.rest.slack(&self.state.elements)
+        } else {
+            super::model::Slack::NONE
+        };
         let (estimate, certain) =
             super::model::stable_substeps(&self.rest.masses, &acc.stiffness, &acc.damping, slack);
         (estimate, certain, limiter)

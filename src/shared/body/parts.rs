@@ -62,9 +62,14 @@ impl Rest {
     /// first use.
     pub fn slack(&self, elements: &ModelState) -> Slack {
         *self.slack.get_or_init(|| {
-            let volumes = self.mesh.rest_volumes();
-            let mean = volumes.iter().sum::<Real>() / volumes.len().max(1) as Real;
-            let cell_size = mean.powf(1.0 / DIM as Real);
+            // The smallest cell's size: no cell is strained more than the probe's strain.
+            let smallest = self
+                .mesh
+                .rest_volumes()
+                .iter()
+                .copied()
+                .fold(Real::INFINITY, Real::min);
+            let cell_size = smallest.powf(1.0 / DIM as Real);
             Slack::measure(elements, self.mesh.nodes(), &self.masses, cell_size)
         })
     }

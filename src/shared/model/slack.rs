@@ -5,15 +5,16 @@
 use super::super::math::{Real, Rotation, Vector, DIM};
 use super::{Accumulator, ModelState};
 
-/// Power iterations per matrix: the Rayleigh quotient (a lower bound of the top eigenvalue,
-/// so an upper bound of the slack) is within 3 % of its limit after 30 on the lattices
-/// measured (res 5 and 9 cubes, every model, both dimensions).
+/// Power iterations per matrix: the Rayleigh quotient (below the top eigenvalue but for the
+/// finite differences' error, so the slack is overestimated) is within 3 % of its limit after
+/// 30 on the lattices measured (res 5 and 9 cubes, every model, both dimensions).
 const ITERATIONS: usize = 30;
 
 /// Divides the measured ratio: covers the power iteration's remaining overestimate.
 const MARGIN: Real = 1.1;
 
-/// Strain of the probing displacement (largest node displacement over the mean cell size).
+/// Strain of the probing displacement (largest node displacement over the smallest cell's
+/// size).
 const PROBE_STRAIN: f64 = 1e-3;
 
 /// The factors by which a body's Gershgorin bounds overestimate the highest eigenvalue of
@@ -39,13 +40,23 @@ impl Slack {
             return Slack::NONE;
         }
         let mut state = state.clone();
-        let fits = state.warm_start().len();
-        // A fresh fit at rest: the measure depends on the rest mesh alone, so a body restored
-        // from a snapshot gets the same one.
-        let _ = state.set_warm_start(&vec![Rotation::IDENTITY; fits]);
+        // Every evaluation fits its rotations afresh from the rest orientation: the measure
+        // depends on the rest mesh alone (a body restored from a snapshot gets the same one),
+        // and each probe linearises the same map.
+        let identity = vec![Rotation::IDENTITY; state.warm_start().len()];
+        let mut evaluate = |x: &[Vector], v: &[Vector], acc: &mut Accumulator| {
+            let _ = state.set_warm_start(&identity);
+            acc.clear();
+            state.accumulate(x, v, acc);
+        };
+        // About the centroid, so that a small probe is not lost to the rounding of large
+        // coordinates (the forces do not depend on where the body is).
+        let centre = rest.iter().copied().sum::<Vector>() / n as Real;
+        let rest: Vec<Vector> = rest.iter().map(|p| *p - centre).collect();
+        let rest = &rest[..];
         let zero = vec![Vector::ZERO; n];
         let mut acc = Accumulator::new(n);
-        state.accumulate(rest, &zero, &mut acc);
+        evaluate(rest, &zero, &mut acc);
         let f0 = acc.force.clone();
         let bound = |rows: &[Real]| {
             rows.iter()
@@ -66,16 +77,14 @@ impl Slack {
             }
             let s = (PROBE_STRAIN * f64::from(cell_size) / f64::from(largest)) as Real;
             let x: Vec<Vector> = rest.iter().zip(y).map(|(p, d)| *p + *d * s).collect();
-            acc.clear();
-            state.accumulate(&x, &zero, &mut acc);
+            evaluate(&x, &zero, &mut acc);
             for ((o, f), f0) in out.iter_mut().zip(&acc.force).zip(&f0) {
                 *o = (*f0 - *f) / s;
             }
         });
         // D y = f(x0, 0) − f(x0, y): the damping forces are linear in the velocities.
         let damping = top_eigenvalue(n, &inv_sqrt_m, |y, out| {
-            acc.clear();
-            state.accumulate(rest, y, &mut acc);
+            evaluate(rest, y, &mut acc);
             for ((o, f), f0) in out.iter_mut().zip(&acc.force).zip(&f0) {
                 *o = *f0 - *f;
             }

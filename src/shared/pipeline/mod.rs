@@ -18,8 +18,9 @@
 //!    element forces at the current state (with each node's Gershgorin stiffness and damping
 //!    bounds); the substep size, the remaining time split evenly into pieces no longer than
 //!    the integrator's stability bound (for symplectic Euler, the papers' integrator,
-//!    `safety · min_i 2/ω_i (√(1+ζ_i²) − ζ_i)` with each node's bounds divided by the body's
-//!    measured slack, and never beyond the bounds themselves,
+//!    `safety · min_i 2/ω_i (√(1+ζ_i²) − ζ_i)`, with each node's bounds divided by the body's
+//!    measured slack when the explicit integrator steps it alone, and never beyond the bounds
+//!    themselves,
 //!    [`stable_substeps`](super::model::stable_substeps)) and than the edge-repulsion crossing
 //!    limiter allows; the integrator's velocity update
 //!    (`v += h (f/m + g)`, [`super::integrator`]); the bone drive ([`super::attach`]); contacts on

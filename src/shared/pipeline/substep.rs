@@ -533,7 +533,7 @@ fn next_substep(
             timed(&mut m.times.forces, || m.body.refresh_forces());
         }
         let calibrated = alone && !m.body.self_contact();
-        let bound = integrator.bound(m.body);
+        let bound = integrator.bound(m.body, calibrated);
         match substep_size(bound, calibrated, ctx, remaining, &mut m.stats) {
             Some(hi) => h = h.min(hi),
             None => out = true,
