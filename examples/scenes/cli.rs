@@ -84,6 +84,8 @@ pub enum IntegratorArg {
     /// Implicit midpoint by Vertex Block Descent (`--sweeps`): keeps a free body's energy and
     /// angular momentum; backward Euler in steps with contacts or bones.
     Midpoint,
+    /// Per body: explicit where it takes few substeps, midpoint (`--sweeps`) otherwise.
+    Auto,
 }
 
 /// On or off.
@@ -636,6 +638,9 @@ macro_rules! dimension_runner {
                             iterations: args.sweeps.unwrap_or(10),
                         },
                         Some(IntegratorArg::Midpoint) => Integrator::Midpoint {
+                            iterations: args.sweeps.unwrap_or(10),
+                        },
+                        Some(IntegratorArg::Auto) => Integrator::Auto {
                             iterations: args.sweeps.unwrap_or(10),
                         },
                         _ => Integrator::Explicit,

@@ -30,7 +30,7 @@ pub use body::{Deformable, DeformableBuilder};
 pub use contact::ContactPoint;
 pub use error::BuildError;
 pub use events::{ChannelEventCollector, DeformableContactEvent, DeformableEventHandler};
-pub use integrator::Integrator;
+pub use integrator::{Integrator, AUTO_SUBSTEPS};
 pub use material::{Material, Stiffness};
 pub use mesh::{CellKind, Mesh, MeshWarning};
 pub use model::{ElementModel, RotationFit, ShapeDamping};

@@ -42,6 +42,10 @@ pub struct DeformableReport {
     pub detached: usize,
     /// Substeps taken.
     pub substeps: usize,
+    /// Whether the step was implicit (one solve, `substeps` 1) rather than explicit substeps
+    /// ([`Integrator::Auto`](super::Integrator::Auto) chooses per body).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub implicit: bool,
     /// Substeps whose size the edge-repulsion crossing limiter chose (tighter than the
     /// stability bound).
     pub limiter_substeps: usize,

@@ -67,8 +67,8 @@ impl DeformableWorld {
     ) -> Result<DeformableHandle, (Box<Deformable>, BuildError)> {
         let settings = self.pipeline.settings;
         let dt = self.physics.integration_parameters.dt;
-        let calibrated = settings.integrator == super::integrator::Integrator::Explicit
-            && !deformable.self_contact();
+        let calibrated =
+            !settings.integrator.steps_implicitly(&deformable) && !deformable.self_contact();
         let substep = deformable.substep(settings.safety, calibrated);
         let substeps = f64::from(dt) / f64::from(substep);
         let fits = substeps.partial_cmp(&(settings.max_substeps as f64))

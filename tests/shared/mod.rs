@@ -1,5 +1,6 @@
 //! Tests written once for both dimensions: `crate::dim` is `sinew::dim2` or `sinew::dim3`.
 
+mod auto;
 mod bones;
 mod cantilever;
 mod contact;

@@ -112,6 +112,9 @@ pub(crate) struct StepBuffers {
     pub midpoint: MidpointState,
     /// This step's [`PipelineSettings::global_iterations`](super::super::PipelineSettings::global_iterations).
     pub global_iterations: usize,
+    /// Whether [`Integrator::Auto`](super::super::Integrator::Auto) steps the body implicitly
+    /// this step.
+    pub auto_implicit: bool,
 }
 
 impl StepBuffers {
@@ -126,6 +129,7 @@ impl StepBuffers {
             soft_memory: Vec::new(),
             midpoint: MidpointState::default(),
             global_iterations: 0,
+            auto_implicit: false,
         }
     }
 }

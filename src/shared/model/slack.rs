@@ -23,6 +23,8 @@ const PROBE_STRAIN: f64 = 1e-3;
 pub(crate) struct Slack {
     pub stiffness: Real,
     pub damping: Real,
+    /// The calibrated stable substep at rest (s), before the pipeline's safety factor.
+    pub at_rest: Real,
 }
 
 impl Slack {
@@ -30,6 +32,7 @@ impl Slack {
     pub const NONE: Slack = Slack {
         stiffness: 1.0,
         damping: 1.0,
+        at_rest: Real::INFINITY,
     };
 
     /// Measures the slack of `state` at the rest positions `rest` (every model's forces vanish
@@ -96,10 +99,14 @@ impl Slack {
                 1.0
             }
         };
-        Slack {
+        let mut slack = Slack {
             stiffness: ratio(stiffness_bound, stiffness),
             damping: ratio(damping_bound, damping),
-        }
+            at_rest: Real::INFINITY,
+        };
+        evaluate(rest, &zero, &mut acc);
+        slack.at_rest = super::stable_substeps(masses, &acc.stiffness, &acc.damping, slack).0;
+        slack
     }
 }
 

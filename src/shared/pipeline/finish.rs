@@ -45,6 +45,7 @@ pub(super) fn diagnose(
     r.frozen = body.activation.frozen;
     r.teleported = sc.bones.teleported;
     r.substeps = stats.substeps;
+    r.implicit = stats.implicit;
     r.limiter_substeps = stats.limiter_substeps;
     r.substep_cap_hit = stats.cap_hit;
     r.lost_time = stats.lost_time;

@@ -27,7 +27,6 @@
 //! [`PipelineSettings::fixed_substeps`]: super::PipelineSettings::fixed_substeps
 //! [`Integrator::Midpoint`]: super::super::Integrator::Midpoint
 
-use super::super::integrator::Integrator;
 use super::super::math::Real;
 use super::super::rapier::dynamics::RigidBodySet;
 use super::substep::Member;
@@ -50,12 +49,12 @@ pub(super) fn any(
     bodies: &RigidBodySet,
 ) -> bool {
     let settings = &ctx.settings;
-    let on = matches!(settings.integrator, Integrator::Midpoint { .. })
-        && settings.fixed_substeps.is_none();
+    let on = settings.integrator.midpoint_rule() && settings.fixed_substeps.is_none();
     let most = MAX_SUBSTEPS.min(settings.max_substeps) as Real;
     let mut any = false;
     for m in members.iter_mut() {
-        if !on || !m.live || m.body.bindings.len() > 0 {
+        let implicit = settings.integrator.steps_implicitly(m.body);
+        if !on || !implicit || !m.live || m.body.bindings.len() > 0 {
             leave(m);
             continue;
         }

@@ -60,7 +60,7 @@ use super::contact::soft::{self, SoftSurface};
 use super::contact::{Candidate, ContactMaterial, ContactPoint, Scan};
 use super::coupling::{self, BodyMotion, RigidBackup};
 use super::events::{DeformableContactEvent, DeformableEventHandler};
-use super::integrator::Integrator;
+use super::integrator::{Integrator, AUTO_SUBSTEPS};
 use super::math::{Real, Vector};
 use super::rapier::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
 use super::rapier::geometry::{BroadPhaseBvh, ColliderHandle, ColliderSet};
@@ -525,6 +525,14 @@ fn step_group<'a>(
     // was launched): such an island, or one with another member, steps explicitly.
     let shares = members.len() > 1 && !shared.is_empty();
     let integrator = ctx.settings.integrator;
+    if let Integrator::Auto { .. } = integrator {
+        // Implicit when the explicit step would take more than AUTO_SUBSTEPS substeps at rest.
+        let most = AUTO_SUBSTEPS as Real * ctx.settings.safety;
+        for m in members.iter_mut() {
+            let at_rest = m.body.rest.slack(&m.body.state.elements).at_rest;
+            m.body.step.auto_implicit = ctx.dt > most * at_rest;
+        }
+    }
     let together = soft
         && !shares
         && members

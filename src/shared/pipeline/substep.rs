@@ -7,7 +7,7 @@ use super::super::contact::soft::{self, NearFacets};
 use super::super::contact::soft_terms;
 use super::super::contact::{self, Contact, FacetMotion, FreeNode};
 use super::super::coupling::{BodyMotion, Substep};
-use super::super::integrator::{AfterContacts, Bound, Integrate, Integrator, Together};
+use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
 use super::super::math::{Real, Vector, FACET_ARITY};
 use super::super::mesh::Mesh;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
@@ -23,6 +23,8 @@ const BLOCK_PASSES: usize = 2;
 #[derive(Copy, Clone, Debug, Default)]
 pub(super) struct SubstepStats {
     pub substeps: usize,
+    /// Whether the body took the implicit step.
+    pub implicit: bool,
     /// Substeps the crossing limiter shortened.
     pub limiter_substeps: usize,
     /// Whether the loop ran out of substeps, and the time of the step it dropped.
@@ -526,13 +528,16 @@ fn next_substep(
     // Contacts lose accuracy with the substep (ARCHITECTURE §4.1): surfaces that may meet each
     // other or themselves, and an implicit integrator's impacts taken explicitly, keep the
     // uncalibrated bound.
-    let alone = members.len() == 1 && ctx.settings.integrator == Integrator::Explicit;
+    let alone = members.len() == 1;
     for &i in live {
         let m = &mut members[i];
         if integrator.uses_forces(m.body) {
             timed(&mut m.times.forces, || m.body.refresh_forces());
+        } else {
+            m.stats.implicit = true;
         }
-        let calibrated = alone && !m.body.self_contact();
+        let calibrated =
+            alone && !m.body.self_contact() && !ctx.settings.integrator.steps_implicitly(m.body);
         let bound = integrator.bound(m.body, calibrated);
         match substep_size(bound, calibrated, ctx, remaining, &mut m.stats) {
             Some(hi) => h = h.min(hi),

@@ -234,6 +234,9 @@ impl Candidate {
             Integrator::Midpoint { iterations } => {
                 format!("{} midpoint {iterations}", self.model.name())
             }
+            Integrator::Auto { iterations } => {
+                format!("{} auto {iterations}", self.model.name())
+            }
         }
     }
 

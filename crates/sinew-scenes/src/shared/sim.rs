@@ -642,6 +642,7 @@ pub(super) fn integrator_name(subject: Subject, integrator: Integrator) -> Optio
         (_, Integrator::Explicit) => Some("explicit".to_string()),
         (_, Integrator::Implicit { .. }) => Some("implicit".to_string()),
         (_, Integrator::Midpoint { .. }) => Some("midpoint".to_string()),
+        (_, Integrator::Auto { .. }) => Some("auto".to_string()),
     }
 }
 
@@ -650,7 +651,9 @@ pub(super) fn sweeps(subject: Subject, integrator: Integrator) -> Option<usize> 
     match (subject, integrator) {
         (
             Subject::Sinew(_),
-            Integrator::Implicit { iterations } | Integrator::Midpoint { iterations },
+            Integrator::Implicit { iterations }
+            | Integrator::Midpoint { iterations }
+            | Integrator::Auto { iterations },
         ) => Some(iterations),
         _ => None,
     }
