@@ -21,8 +21,14 @@
 //! cargo bench --bench step -- 'element_update_3d/'  # one group
 //! ```
 //!
-//! Under `cargo test --benches` (criterion's test mode) only resolution 5 is built and each
-//! benchmark runs once.
+//! A fourth group, `scaling_3d`, steps a resting cube of 750 to 998 250 tetrahedra (6, 11,
+//! 21 and 56 nodes per edge; `SINEW_BENCH_SCALING` to choose) for edge repulsion, shape
+//! matching and springs (one explicit substep of `0.4 ms / (res − 1)`) and for edge repulsion
+//! under `Integrator::Implicit { iterations: 2 }` at 60 Hz: `elem/s` is cells per second, and
+//! each world's heap per cell and per node is printed as it is built.
+//!
+//! Under `cargo test --benches` (criterion's test mode) only resolution 5 (scaling: 6) is built
+//! and each benchmark runs once.
 
 use std::time::Duration;
 
@@ -45,6 +51,57 @@ fn resolutions() -> Vec<usize> {
         vec![5, 9, 17, 33]
     } else {
         vec![5]
+    }
+}
+
+/// The scaling group's resolutions: `SINEW_BENCH_SCALING`, else 6 in test mode, else 6, 11,
+/// 21, 56 (750 to 998 250 tetrahedra).
+fn scaling_resolutions() -> Vec<usize> {
+    if let Ok(list) = std::env::var("SINEW_BENCH_SCALING") {
+        return list
+            .split(',')
+            .map(|s| {
+                s.trim()
+                    .parse()
+                    .expect("SINEW_BENCH_SCALING: comma-separated integers")
+            })
+            .collect();
+    }
+    if std::env::args().any(|a| a == "--bench") {
+        vec![6, 11, 21, 56]
+    } else {
+        vec![6]
+    }
+}
+
+/// Heap bytes in use (glibc's `mallinfo2`; 0 elsewhere): unlike the resident size, it does not
+/// count memory freed by earlier worlds and kept by the allocator.
+fn heap_bytes() -> u64 {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        #[repr(C)]
+        struct MallInfo2 {
+            arena: usize,
+            ordblks: usize,
+            smblks: usize,
+            hblks: usize,
+            hblkhd: usize,
+            usmblks: usize,
+            fsmblks: usize,
+            uordblks: usize,
+            fordblks: usize,
+            keepcost: usize,
+        }
+        extern "C" {
+            fn mallinfo2() -> MallInfo2;
+        }
+        // SAFETY: `mallinfo2` only reads the allocator's statistics.
+        let info = unsafe { mallinfo2() };
+        (info.uordblks + info.hblkhd) as u64
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    {
+        0
     }
 }
 
@@ -137,9 +194,78 @@ macro_rules! bench_dimension {
     }};
 }
 
+/// Cost per cell from 10³ to 10⁶ cells (3D).
+fn scaling(c: &mut Criterion) {
+    use sinew::dim3::math::Real;
+    use sinew::dim3::{ElementModel, Integrator};
+    use sinew_scenes::dim3::{FallScene, Subject};
+    let mut group = c.benchmark_group("scaling_3d");
+    group.sample_size(10);
+    group.warm_up_time(Duration::from_millis(200));
+    group.measurement_time(Duration::from_secs(3));
+    let runs = [
+        ("edge-repulsion", ElementModel::EdgeRepulsion, None),
+        ("shape-matching", ElementModel::SHAPE_MATCHING, None),
+        ("springs", ElementModel::Springs, None),
+        (
+            "edge-repulsion-implicit",
+            ElementModel::EdgeRepulsion,
+            Some(Integrator::Implicit { iterations: 2 }),
+        ),
+    ];
+    for res in scaling_resolutions() {
+        for (name, model, implicit) in runs {
+            let scene = match implicit {
+                Some(integrator) => FallScene {
+                    subject: Subject::Sinew(model),
+                    resolution: res,
+                    drop_height: 0.0,
+                    dt: 1.0 / 60.0,
+                    integrator,
+                    ..FallScene::default()
+                },
+                None => FallScene {
+                    subject: Subject::Sinew(model),
+                    resolution: res,
+                    drop_height: 0.0,
+                    dt: 4.0e-4 / (res - 1) as Real,
+                    fixed_substeps: Some(1),
+                    ..FallScene::default()
+                },
+            };
+            let mut world = None;
+            group.throughput(Throughput::Elements(((res - 1).pow(3) * 6) as u64));
+            group.bench_with_input(BenchmarkId::new(name, res), &res, |b, _| {
+                let world = world.get_or_insert_with(|| {
+                    let before = heap_bytes();
+                    let mut world = scene.sim().expect("scene builds").world;
+                    // Awake throughout: a resting cube would fall asleep and cost nothing.
+                    world.pipeline.settings.time_until_sleep = Real::INFINITY;
+                    for _ in 0..3 {
+                        world.step();
+                    }
+                    let bytes = heap_bytes().saturating_sub(before) as f64;
+                    let (_, body) = world.deformables.iter().next().expect("one body");
+                    let (cells, nodes) = (body.mesh().num_cells(), body.positions().len());
+                    println!(
+                        "scaling_3d/{name}/{res}: {cells} cells, {nodes} nodes, heap \
+                         {:.0} bytes per cell, {:.0} per node",
+                        bytes / cells as f64,
+                        bytes / nodes as f64
+                    );
+                    world
+                });
+                b.iter(|| world.step().wall_time)
+            });
+        }
+    }
+    group.finish();
+}
+
 fn steps(c: &mut Criterion) {
     bench_dimension!(c, dim3, "3d");
     bench_dimension!(c, dim2, "2d");
+    scaling(c);
 }
 
 criterion_group!(benches, steps);

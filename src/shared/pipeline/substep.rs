@@ -536,8 +536,11 @@ fn next_substep(
         } else {
             m.stats.implicit = true;
         }
-        let calibrated =
-            alone && !m.body.self_contact() && !ctx.settings.integrator.steps_implicitly(m.body);
+        // (Fixed substeps need no bound: the body's slack is not measured for them.)
+        let calibrated = alone
+            && ctx.settings.fixed_substeps.is_none()
+            && !m.body.self_contact()
+            && !ctx.settings.integrator.steps_implicitly(m.body);
         let bound = integrator.bound(m.body, calibrated);
         match substep_size(bound, calibrated, ctx, remaining, &mut m.stats) {
             Some(hi) => h = h.min(hi),
