@@ -71,8 +71,11 @@ use super::set::{DeformableHandle, DeformableSet};
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct PipelineSettings {
-    /// Fraction of the stability bound used as the largest substep (default 0.5: the
-    /// Gershgorin bound overestimates ω by 1.3–1.8×, and damping and nonlinearity eat the rest).
+    /// Fraction of the estimated stability limit used as the largest substep (default 0.5,
+    /// for damping, nonlinearity and the estimate's error). The estimate is the per-node
+    /// Gershgorin bound calibrated by the body's measured slack for a body the explicit
+    /// integrator steps alone, the bound itself otherwise; the substep never exceeds the
+    /// uncalibrated bound (`docs/ARCHITECTURE.md` §4.1).
     pub safety: Real,
     /// Largest number of substeps per step (default 20 000). When reached, the rest of the
     /// step is skipped for that body and the report says so.
