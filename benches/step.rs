@@ -34,44 +34,35 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 
-/// The resolutions to run: `SINEW_BENCH_RES` (comma separated), else 5 in test mode (no
-/// `--bench` argument, as under `cargo test --benches`), else 5, 9, 17, 33.
-fn resolutions() -> Vec<usize> {
-    if let Ok(list) = std::env::var("SINEW_BENCH_RES") {
+/// The resolutions in the environment variable `var` (comma separated), else `test` in
+/// criterion's test mode (no `--bench` argument, as under `cargo test --benches`), else `bench`.
+fn resolutions_from(var: &str, test: &[usize], bench: &[usize]) -> Vec<usize> {
+    if let Ok(list) = std::env::var(var) {
         return list
             .split(',')
             .map(|s| {
                 s.trim()
                     .parse()
-                    .expect("SINEW_BENCH_RES: comma-separated integers")
+                    .unwrap_or_else(|_| panic!("{var}: comma-separated integers"))
             })
             .collect();
     }
     if std::env::args().any(|a| a == "--bench") {
-        vec![5, 9, 17, 33]
+        bench.to_vec()
     } else {
-        vec![5]
+        test.to_vec()
     }
+}
+
+/// The resolutions to run: `SINEW_BENCH_RES`, else 5 in test mode, else 5, 9, 17, 33.
+fn resolutions() -> Vec<usize> {
+    resolutions_from("SINEW_BENCH_RES", &[5], &[5, 9, 17, 33])
 }
 
 /// The scaling group's resolutions: `SINEW_BENCH_SCALING`, else 6 in test mode, else 6, 11,
 /// 21, 56 (750 to 998 250 tetrahedra).
 fn scaling_resolutions() -> Vec<usize> {
-    if let Ok(list) = std::env::var("SINEW_BENCH_SCALING") {
-        return list
-            .split(',')
-            .map(|s| {
-                s.trim()
-                    .parse()
-                    .expect("SINEW_BENCH_SCALING: comma-separated integers")
-            })
-            .collect();
-    }
-    if std::env::args().any(|a| a == "--bench") {
-        vec![6, 11, 21, 56]
-    } else {
-        vec![6]
-    }
+    resolutions_from("SINEW_BENCH_SCALING", &[6], &[6, 11, 21, 56])
 }
 
 /// Heap bytes in use (glibc's `mallinfo2`; 0 elsewhere): unlike the resident size, it does not
