@@ -1,7 +1,8 @@
 //! `Integrator::Auto`: the explicit step for a body it takes in a few substeps, the midpoint
 //! step for one that would need many.
 
-use crate::dim::{ElementModel, Integrator};
+use crate::dim::math::{Vector, DIM, UP};
+use crate::dim::{DeformableBuilder, DeformableWorld, ElementModel, Integrator, Material};
 use crate::scenes::{BallScene, FallScene, Subject};
 
 const AUTO: Integrator = Integrator::Auto { iterations: 2 };
@@ -55,4 +56,36 @@ fn auto_steps_a_stiff_ball_at_60_hz_implicitly_and_it_comes_to_rest() {
         (rest - radius).abs() < 0.01 * radius.max(1.0),
         "rests at {rest} m"
     );
+}
+
+#[test]
+fn the_report_says_which_step_auto_took() {
+    // A stiff 20 cm cube (E = 10⁷ Pa) at 60 Hz would take dozens of substeps: implicit. A
+    // soft one (E = 10³ Pa) at 1 ms takes one or two: explicit. Both in free fall.
+    let run = |young: f32, dt: f32| {
+        let mut world = DeformableWorld::new();
+        world.set_dt(dt);
+        world.pipeline.settings.integrator = AUTO;
+        let body = DeformableBuilder::cuboid(Vector::splat(0.1), [5; DIM])
+            .material(Material {
+                young_modulus: young,
+                ..Default::default()
+            })
+            .translation(UP * 10.0)
+            .build()
+            .unwrap();
+        let h = world.insert(body);
+        world.step();
+        let r = world.report().get(h).unwrap().clone();
+        (r.implicit, r.substeps)
+    };
+    let (stiff, stiff_substeps) = run(1e7, 1.0 / 60.0);
+    assert!(
+        stiff,
+        "the stiff cube at 60 Hz stepped explicitly ({stiff_substeps} substeps)"
+    );
+    assert_eq!(stiff_substeps, 1);
+    let (soft, soft_substeps) = run(1e3, 1e-3);
+    assert!(!soft, "the soft cube at 1 ms stepped implicitly");
+    assert!(soft_substeps >= 1);
 }
