@@ -85,13 +85,18 @@ impl Slack {
                 *o = (*f0 - *f) / s;
             }
         });
-        // D y = f(x0, 0) − f(x0, y): the damping forces are linear in the velocities.
-        let damping = top_eigenvalue(n, &inv_sqrt_m, |y, out| {
-            evaluate(rest, y, &mut acc);
-            for ((o, f), f0) in out.iter_mut().zip(&acc.force).zip(&f0) {
-                *o = *f0 - *f;
-            }
-        });
+        // D y = f(x0, 0) − f(x0, y): the damping forces are linear in the velocities (none to
+        // measure for an undamped material).
+        let damping = if damping_bound <= 0.0 {
+            0.0
+        } else {
+            top_eigenvalue(n, &inv_sqrt_m, |y, out| {
+                evaluate(rest, y, &mut acc);
+                for ((o, f), f0) in out.iter_mut().zip(&acc.force).zip(&f0) {
+                    *o = *f0 - *f;
+                }
+            })
+        };
         let ratio = |bound: f64, top: f64| {
             if top > 0.0 && bound.is_finite() {
                 ((bound / top) as Real / MARGIN).max(1.0)
