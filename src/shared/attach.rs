@@ -11,8 +11,9 @@
 //!   the anchor's velocity plus a fifth of its position error per substep
 //!   (`v_anchor + 0.2 (anchor − x)/h`: a full correction on a body whose joints rapier solves
 //!   later feeds energy into the pair), and the opposite impulse goes to the body at the
-//!   anchor, scaled by the pair's effective mass so a light body is not over-driven. Linear
-//!   momentum of node + body is conserved exactly.
+//!   anchor. All the nodes bound to one body are solved with it at once (the body's velocity
+//!   the unknown of one small dense solve), so however light the body, it moves as its nodes
+//!   together pull it. Linear and angular momentum of nodes + body are conserved exactly.
 //!
 //! Bound nodes are not tested against colliders as nodes. A surface facet with bound nodes
 //! still meets rigid features; its bound nodes count with zero inverse mass there (the bone
@@ -20,8 +21,8 @@
 //! dropped at the next step (the step report counts it).
 
 use super::coupling::{self, MotionKind, Substep};
-use super::math::{Real, Vector};
-use super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
+use super::math::{self, Real, Vector, TWIST_DIM};
+use super::rapier::dynamics::{RigidBody, RigidBodyHandle, RigidBodySet};
 use super::rapier::geometry::{Collider, ColliderHandle};
 
 /// A node bound to a rigid body.
@@ -220,6 +221,9 @@ pub(crate) fn drive_bones(
 ) {
     let (h, s1, dt, t) = (at.h, at.s1, at.dt, at.t);
     targets.clear();
+    // The dynamic bindings: binding, its anchor now and the velocity that corrects a fifth of
+    // its position error, taken once, before the passes that share the impulses.
+    let mut dynamic: Vec<(usize, Vector, Vector)> = Vec::new();
     for (k, a) in bindings.list.iter().enumerate() {
         let Some(m) = motion_of[k] else {
             targets.push(None);
@@ -231,31 +235,96 @@ pub(crate) fn drive_bones(
         let desired = (target - nodes.positions[i]) / h;
         if motion.kind == MotionKind::Dynamic {
             let anchor_now = motion.pose_at(t / dt, dt, bodies).transform_point(a.anchor);
-            let Some(rb) = bodies.get_mut(a.body) else {
-                targets.push(None);
-                continue;
-            };
             // Velocity-level binding: the anchor's velocity plus a fraction of the
             // position error per substep (a full correction on a body whose joints
             // rapier solves later feeds energy into the pair).
-            let v_anchor = rb.velocity_at_point(anchor_now);
-            let wanted =
-                v_anchor + (anchor_now - nodes.positions[i]) * (DYNAMIC_BINDING_CORRECTION / h);
-            let delta = wanted - nodes.velocities[i];
-            let len = delta.length();
-            if len > 0.0 {
-                let dir = delta / len;
-                let w_body = coupling::inv_mass_at(rb, target, dir);
-                let impulse = delta / (nodes.inv_masses[i] + w_body);
-                nodes.velocities[i] += impulse * nodes.inv_masses[i];
-                coupling::apply_impulse(rb, -impulse, target, 0.0);
-            }
+            let bias = (anchor_now - nodes.positions[i]) * (DYNAMIC_BINDING_CORRECTION / h);
+            dynamic.push((k, anchor_now, bias));
             targets.push(None);
         } else {
             nodes.velocities[i] = desired;
             targets.push(Some(target));
         }
     }
+    // Each body with all the nodes bound to it at once: one pass of impulses, each sized as if
+    // its node alone pulled the body, over-drove a light body (a 1.6 kg box bound to nine
+    // nodes of a soft cube rang up to 78 m/s in 0.4 s), and sequential passes converge slowly
+    // on one.
+    dynamic.sort_by_key(|&(k, _, _)| (bindings.list[k].body.into_raw_parts(), k));
+    for group in dynamic.chunk_by(|a, b| bindings.list[a.0].body == bindings.list[b.0].body) {
+        let Some(rb) = bodies.get_mut(bindings.list[group[0].0].body) else {
+            continue;
+        };
+        let nodes_of = group.iter().map(|&(k, anchor, bias)| {
+            let i = bindings.list[k].node as usize;
+            (i, anchor, bias)
+        });
+        let rows: Vec<(usize, Vector, Vector)> = nodes_of
+            .filter(|&(i, _, _)| nodes.inv_masses[i] > 0.0)
+            .collect();
+        solve_bound_body(rb, &rows, nodes.velocities, nodes.inv_masses);
+    }
+}
+
+/// The nodes `rows` (node, anchor now, correcting velocity) bound to the dynamic body `rb`,
+/// solved as one: the body's velocity `V` is the unknown, each node takes the velocity `V`
+/// gives its anchor plus its correction, and the body the opposite of the nodes' impulses,
+/// `V = V₀ − M⁻¹ Σ Jᵀ λ(V)`, linear in `V` (one dense solve). Momentum is conserved.
+fn solve_bound_body(
+    rb: &mut RigidBody,
+    rows: &[(usize, Vector, Vector)],
+    velocities: &mut [Vector],
+    inv_masses: &[Real],
+) {
+    if rows.is_empty() {
+        return;
+    }
+    let com = rb.center_of_mass();
+    let start = math::twist_to_array(rb.linvel(), rb.angvel());
+    // The impulse node `i` takes to move with the body at twist `twist`.
+    let impulse = |(i, anchor, bias): (usize, Vector, Vector), twist: &[Real; TWIST_DIM]| {
+        let (v, w) = math::twist_from_array(twist);
+        (v + math::ang_cross(w, anchor - com) + bias - velocities[i]) / inv_masses[i]
+    };
+    let response = |anchor: Vector, p: Vector| {
+        let (dv, dw) = coupling::impulse_response(rb, anchor, p);
+        math::twist_to_array(dv, dw)
+    };
+    // `R(V) = V − V₀ + Σ M⁻¹ Jᵀ λ(V)`: its value at `V₀`, and its (constant) Jacobian by
+    // columns.
+    let mut residual = [0.0; TWIST_DIM];
+    let mut jacobian = [[0.0; TWIST_DIM]; TWIST_DIM];
+    for (c, col) in jacobian.iter_mut().enumerate() {
+        col[c] = 1.0;
+    }
+    for &row in rows {
+        let (i, anchor, _) = row;
+        add(&mut residual, response(anchor, impulse(row, &start)));
+        for (c, col) in jacobian.iter_mut().enumerate() {
+            let mut unit = [0.0; TWIST_DIM];
+            unit[c] = 1.0;
+            let (uv, uw) = math::twist_from_array(&unit);
+            let moved = (uv + math::ang_cross(uw, anchor - com)) / inv_masses[i];
+            add(col, response(anchor, moved));
+        }
+    }
+    let Some(step) = coupling::solve_dense(jacobian, residual) else {
+        return;
+    };
+    let end: [Real; TWIST_DIM] = std::array::from_fn(|k| start[k] - step[k]);
+    if !end.iter().all(|x| x.is_finite()) {
+        return;
+    }
+    let impulses: Vec<Vector> = rows.iter().map(|&row| impulse(row, &end)).collect();
+    for (&(i, anchor, _), p) in rows.iter().zip(impulses) {
+        velocities[i] += p * inv_masses[i];
+        coupling::apply_impulse(rb, -p, anchor, 0.0);
+    }
+}
+
+/// `a += b`.
+fn add(a: &mut [Real; TWIST_DIM], b: [Real; TWIST_DIM]) {
+    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
 }
 
 /// After the positions moved: nodes on fixed or kinematic bones are put exactly on their

@@ -141,7 +141,7 @@ pub(crate) fn solve(
         if norm.is_nan() || norm <= 1e-7 {
             break;
         }
-        let Some(step) = solve_dense(jacobian, residual) else {
+        let Some(step) = coupling::solve_dense(jacobian, residual) else {
             break;
         };
         // A full step where it lowers the residual, else the largest halving that does (the
@@ -291,74 +291,5 @@ fn add(a: &mut [Real; TWIST_DIM], (v, w): (Vector, AngVector)) {
     let b = math::twist_to_array(v, w);
     for (x, y) in a.iter_mut().zip(b) {
         *x += y;
-    }
-}
-
-/// Solves `A x = b` (`a` by columns) by Gaussian elimination with partial pivoting; `None` if
-/// `A` is singular.
-fn solve_dense(
-    a: [[Real; TWIST_DIM]; TWIST_DIM],
-    b: [Real; TWIST_DIM],
-) -> Option<[Real; TWIST_DIM]> {
-    // Row-major copy with the right-hand side appended.
-    let mut m = [[0.0; TWIST_DIM + 1]; TWIST_DIM];
-    for (i, row) in m.iter_mut().enumerate() {
-        for (j, col) in a.iter().enumerate() {
-            row[j] = col[i];
-        }
-        row[TWIST_DIM] = b[i];
-    }
-    for k in 0..TWIST_DIM {
-        let pivot = (k..TWIST_DIM).max_by(|&i, &j| m[i][k].abs().total_cmp(&m[j][k].abs()))?;
-        if m[pivot][k].abs() < 1e-12 {
-            return None;
-        }
-        m.swap(k, pivot);
-        let pivot_row = m[k];
-        for row in m.iter_mut().skip(k + 1) {
-            let f = row[k] / pivot_row[k];
-            for (x, p) in row.iter_mut().zip(pivot_row).skip(k) {
-                *x -= f * p;
-            }
-        }
-    }
-    let mut x = [0.0; TWIST_DIM];
-    for k in (0..TWIST_DIM).rev() {
-        let tail: Real = (k + 1..TWIST_DIM).map(|j| m[k][j] * x[j]).sum();
-        x[k] = (m[k][TWIST_DIM] - tail) / m[k][k];
-    }
-    Some(x)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_dense_solve_answers_a_system_that_needs_pivoting() {
-        // A zero on the diagonal: elimination without row swaps would divide by it.
-        let mut a = [[0.0; TWIST_DIM]; TWIST_DIM];
-        for (c, col) in a.iter_mut().enumerate() {
-            for (r, x) in col.iter_mut().enumerate() {
-                *x = if r == c {
-                    (r % 2) as Real * 3.0
-                } else {
-                    1.0 / (1 + r + c) as Real
-                };
-            }
-        }
-        let x: [Real; TWIST_DIM] = std::array::from_fn(|k| k as Real - 1.5);
-        let b: [Real; TWIST_DIM] =
-            std::array::from_fn(|r| (0..TWIST_DIM).map(|c| a[c][r] * x[c]).sum());
-        let solved = solve_dense(a, b).unwrap();
-        for k in 0..TWIST_DIM {
-            assert!(
-                (solved[k] - x[k]).abs() < 1e-3,
-                "{k}: {} for {}",
-                solved[k],
-                x[k]
-            );
-        }
-        assert!(solve_dense([[0.0; TWIST_DIM]; TWIST_DIM], b).is_none());
     }
 }
