@@ -27,6 +27,10 @@
 //! under `Integrator::Implicit { iterations: 2 }` at 60 Hz: `elem/s` is cells per second, and
 //! each world's heap per cell and per node is printed as it is built.
 //!
+//! With `--features parallel`, a fifth group, `threads_3d`, steps a resting res-17 cube
+//! (`SINEW_BENCH_THREADS_RES` to choose) on rayon pools of 1 and 2 threads: edge repulsion and
+//! shape matching, explicit at 1 ms and implicit (2 sweeps) at 60 Hz.
+//!
 //! Under `cargo test --benches` (criterion's test mode) only resolution 5 (scaling: 6) is built
 //! and each benchmark runs once.
 
@@ -253,10 +257,75 @@ fn scaling(c: &mut Criterion) {
     group.finish();
 }
 
+/// One step of a resting res-17 cube (24 576 tetrahedra, awake) on rayon pools of 1 and 2
+/// threads (feature `parallel`): edge repulsion and shape matching, explicit at 1 ms and
+/// `Integrator::Implicit { iterations: 2 }` at 60 Hz.
+#[cfg(feature = "parallel")]
+fn threads(c: &mut Criterion) {
+    use sinew::dim3::math::Real;
+    use sinew::dim3::{ElementModel, Integrator};
+    use sinew_scenes::dim3::{FallScene, Subject};
+    let res = resolutions_from("SINEW_BENCH_THREADS_RES", &[5], &[17])[0];
+    let mut group = c.benchmark_group("threads_3d");
+    group.sample_size(10);
+    group.warm_up_time(Duration::from_millis(500));
+    group.measurement_time(Duration::from_secs(4));
+    group.throughput(Throughput::Elements(((res - 1).pow(3) * 6) as u64));
+    let runs = [
+        ("edge-repulsion-explicit", ElementModel::EdgeRepulsion, None),
+        (
+            "shape-matching-explicit",
+            ElementModel::SHAPE_MATCHING,
+            None,
+        ),
+        (
+            "edge-repulsion-implicit",
+            ElementModel::EdgeRepulsion,
+            Some(Integrator::Implicit { iterations: 2 }),
+        ),
+        (
+            "shape-matching-implicit",
+            ElementModel::SHAPE_MATCHING,
+            Some(Integrator::Implicit { iterations: 2 }),
+        ),
+    ];
+    for (name, model, implicit) in runs {
+        let scene = FallScene {
+            subject: Subject::Sinew(model),
+            resolution: res,
+            drop_height: 0.0,
+            dt: if implicit.is_some() { 1.0 / 60.0 } else { 1e-3 },
+            integrator: implicit.unwrap_or_default(),
+            ..FallScene::default()
+        };
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a thread pool");
+            let mut world = None;
+            group.bench_with_input(BenchmarkId::new(name, threads), &threads, |b, _| {
+                let world = world.get_or_insert_with(|| {
+                    let mut world = scene.sim().expect("scene builds").world;
+                    world.pipeline.settings.time_until_sleep = Real::INFINITY;
+                    for _ in 0..SETTLE_STEPS {
+                        pool.install(|| world.step());
+                    }
+                    world
+                });
+                b.iter(|| pool.install(|| world.step().wall_time))
+            });
+        }
+    }
+    group.finish();
+}
+
 fn steps(c: &mut Criterion) {
     bench_dimension!(c, dim3, "3d");
     bench_dimension!(c, dim2, "2d");
     scaling(c);
+    #[cfg(feature = "parallel")]
+    threads(c);
 }
 
 criterion_group!(benches, steps);

@@ -23,6 +23,7 @@ pub mod recorder;
 mod report;
 mod set;
 pub mod snapshot;
+mod threads;
 mod world;
 
 pub use attach::{AttachError, Attachment};

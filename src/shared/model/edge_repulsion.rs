@@ -42,6 +42,7 @@ use super::super::material::Resolved;
 use super::super::math::{self, Real, Vector, FACET_ARITY, SIMPLEX_ARITY};
 use super::super::mesh::Mesh;
 use super::springs::{Law, Springs};
+use super::volume::Volume;
 use super::{Accumulator, NodeBounds};
 
 /// Calibration constant `s` of the ER material mapping: 47/33 in 3D, 5/6 in 2D (see the
@@ -188,15 +189,23 @@ impl EdgeRepulsion {
         self.edges.constant_bounds(bounds);
     }
 
-    /// Adds forces and the repulsions' stiffness bounds; returns the largest substep the
+    /// Adds forces and the repulsions' stiffness bounds, with those of the volumetric term
+    /// `volume` on the same cells (one pass over the cells); returns the largest substep the
     /// crossing limiter allows.
-    pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
+    pub fn accumulate(
+        &self,
+        x: &[Vector],
+        v: &[Vector],
+        acc: &mut Accumulator,
+        volume: Option<&Volume>,
+    ) -> Real {
         self.edges.accumulate(x, v, acc);
         let n = x.len();
         let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
         let mut limit = Real::INFINITY;
-        for (((ids, side), h0), k) in self.cell_data(0) {
-            let (f, k_row, cell_limit) = cell_terms(ids, side, h0, k, x, v);
+        for (cell, (((ids, side), h0), k)) in self.cell_data(0).enumerate() {
+            let (f, k_row, cell_limit) =
+                cell_terms(ids, side, h0, k, x, v, volume.map(|v| (v, cell)));
             for a in 0..SIMPLEX_ARITY {
                 let i = ids[a] as usize;
                 force[i] += f[a];
@@ -217,6 +226,7 @@ impl EdgeRepulsion {
         v: &[Vector],
         force: &mut [Vector],
         stiffness: &mut [Real],
+        volume: Option<&Volume>,
     ) -> Real {
         use super::parallel::CELLS_PER_TASK as CHUNK;
         use rayon::prelude::*;
@@ -230,9 +240,12 @@ impl EdgeRepulsion {
             .map(|(t, (force, stiffness))| {
                 let mut limit = Real::INFINITY;
                 let out = force.iter_mut().zip(stiffness);
-                for ((f, k_row), (((ids, side), h0), k)) in out.zip(self.cell_data(t * CHUNK)) {
+                let cells = self.cell_data(t * CHUNK).enumerate();
+                for ((f, k_row), (c, (((ids, side), h0), k))) in out.zip(cells) {
                     let cell_limit;
-                    (*f, *k_row, cell_limit) = cell_terms(ids, side, h0, k, x, v);
+                    let cell = t * CHUNK + c;
+                    (*f, *k_row, cell_limit) =
+                        cell_terms(ids, side, h0, k, x, v, volume.map(|v| (v, cell)));
                     limit = limit.min(cell_limit);
                 }
                 limit
@@ -266,9 +279,11 @@ impl EdgeRepulsion {
             .zip(&k[first..])
     }
 
-    pub fn elastic_energy(&self, x: &[Vector]) -> Real {
-        let mut e = self.edges.elastic_energy(x);
-        for (cell, ids) in self.cells.chunks_exact(SIMPLEX_ARITY).enumerate() {
+    /// The repulsions' elastic energy in cells `cells`.
+    pub fn cell_energy(&self, x: &[Vector], cells: std::ops::Range<usize>) -> Real {
+        let mut e = 0.0;
+        for cell in cells {
+            let ids = &self.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
             for a in 0..SIMPLEX_ARITY {
                 let s = cell * SIMPLEX_ARITY + a;
                 let f = OPPOSITE[a];
@@ -288,9 +303,9 @@ impl EdgeRepulsion {
     }
 }
 
-/// The repulsions of one cell, summed per vertex: the force on each vertex, its Gershgorin
-/// stiffness row, and the crossing limiter of the cell (infinite when no vertex approaches its
-/// facet).
+/// The repulsions of one cell and its `volume` term (the term and the cell's index), summed per vertex: the force on each
+/// vertex, its Gershgorin stiffness row, and the crossing limiter of the cell (infinite when
+/// no vertex approaches its facet).
 #[inline(always)]
 fn cell_terms(
     ids: &[u32; SIMPLEX_ARITY],
@@ -299,6 +314,7 @@ fn cell_terms(
     k: &[Real; SIMPLEX_ARITY],
     x: &[Vector],
     v: &[Vector],
+    volume: Option<(&Volume, usize)>,
 ) -> ([Vector; SIMPLEX_ARITY], [Real; SIMPLEX_ARITY], Real) {
     let xs: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
     let vs: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| v[ids[a] as usize]);
@@ -329,6 +345,13 @@ fn cell_terms(
             if rate < 0.0 {
                 limit = limit.min(CROSSING_FRACTION * h / -rate);
             }
+        }
+    }
+    if let Some((volume, cell)) = volume {
+        let (f, k) = volume.cell_terms(cell, &xs);
+        for a in 0..SIMPLEX_ARITY {
+            force[a] += f[a];
+            stiffness[a] += k[a];
         }
     }
     (force, stiffness, limit)

@@ -17,7 +17,8 @@
 //! one: `Σ m (y − x) / Σ m`. Gauss–Seidel hardly moves a body much stiffer than `m/h²` as a
 //! whole; with this its free flight is ballistic whatever the sweeps. Edge-repulsion terms are
 //! evaluated once per cell and vertex from the cell's volume gradients
-//! ([`math::simplex_gradients`]).
+//! ([`math::simplex_gradients`]). A large body sweeps by slabs of consecutive nodes, on rayon's
+//! threads with feature `parallel` ([`Solve::sweep_alone`]).
 //!
 //! Edge repulsion keeps its promise under the large step with a backtracking line search: a
 //! node's step is halved until every repulsion of its cells keeps the vertex above a tenth of
@@ -50,7 +51,10 @@
 
 mod global;
 
+use std::ops::Range;
+
 use super::super::math::{self, Matrix, Real, Rotation, Vector, FACET_ARITY, SIMPLEX_ARITY};
+use super::super::threads;
 use super::edge_repulsion::{EdgeRepulsion, MIN_HEIGHT_RATIO, OPPOSITE};
 use super::hessian;
 use super::shape_matching::ShapeMatching;
@@ -75,6 +79,10 @@ pub(crate) struct Incidence {
     /// Per edge-repulsion cell, the sign of its rest `D` ([`math::simplex_gradients`]): its
     /// heights are `sign · D / |g_a|`.
     cell_sign: Vec<Real>,
+    /// Nodes per slab of the sweeps ([`Solve::sweep_alone`]): wider than any term's span of
+    /// node indices, so a term touches at most two consecutive slabs; the node count when the
+    /// body is too small or its numbering too wide for [`MIN_SLABS`] slabs.
+    slab: usize,
 }
 
 impl Incidence {
@@ -131,6 +139,7 @@ impl Incidence {
             out.cells.extend_from_slice(list);
             out.cell_start.push(out.cells.len() as u32);
         }
+        out.slab = slab_size(nodes, springs, cells);
         if let Some(er) = er {
             // `g_0` is `±` the facet normal of `OPPOSITE[0]` whatever the cell; the sign is the
             // reference simplex's.
@@ -149,6 +158,12 @@ impl Incidence {
         out
     }
 
+    /// The slabs' node ranges, in order.
+    fn slabs(&self, nodes: usize) -> impl DoubleEndedIterator<Item = Range<usize>> + Clone {
+        let slab = self.slab.max(1);
+        (0..nodes.div_ceil(slab)).map(move |k| k * slab..((k + 1) * slab).min(nodes))
+    }
+
     fn springs_of(&self, i: usize) -> &[u32] {
         &self.springs[self.spring_start[i] as usize..self.spring_start[i + 1] as usize]
     }
@@ -158,11 +173,74 @@ impl Incidence {
     }
 }
 
+/// Sweeps over fewer slabs than this go in node order, in one slab.
+const MIN_SLABS: usize = 4;
+
+/// The most slabs a sweep is cut into (a fixed count, so the slabs and the result do not depend
+/// on the threads).
+const MAX_SLABS: usize = 16;
+
+/// The fewest nodes of a slab.
+const MIN_SLAB_NODES: usize = 256;
+
+/// [`Incidence::slab`] for `nodes` nodes with these terms.
+fn slab_size(nodes: usize, springs: Option<&Springs>, cells: Option<(&[u32], usize)>) -> usize {
+    let mut span = 0;
+    if let Some(s) = springs {
+        for [i, j] in &s.pairs {
+            span = span.max(i.abs_diff(*j) as usize);
+        }
+    }
+    if let Some((ids, arity)) = cells {
+        for cell in ids.chunks_exact(arity) {
+            let (low, high) = cell
+                .iter()
+                .fold((u32::MAX, 0), |(l, h), &i| (l.min(i), h.max(i)));
+            span = span.max((high - low) as usize);
+        }
+    }
+    // A multiple of four: each kind has an even count of slabs, which two threads share
+    // evenly.
+    let slabs = (nodes / (span + 1).max(MIN_SLAB_NODES)).min(MAX_SLABS) / 4 * 4;
+    if slabs < MIN_SLABS {
+        nodes
+    } else {
+        nodes.div_ceil(slabs)
+    }
+}
+
 /// The unit vector along axis `d`.
 fn unit(d: usize) -> Vector {
     let mut e = Vector::ZERO;
     e[d] = 1.0;
     e
+}
+
+/// The nodes' positions as a sweep reads them.
+trait Positions: Sync {
+    fn at(&self, j: usize) -> Vector;
+}
+
+impl Positions for [Vector] {
+    #[inline(always)]
+    fn at(&self, j: usize) -> Vector {
+        self[j]
+    }
+}
+
+/// The positions of nodes `base..base + nodes.len()`.
+#[cfg(feature = "parallel")]
+struct Offset<'a> {
+    base: usize,
+    nodes: &'a [Vector],
+}
+
+#[cfg(feature = "parallel")]
+impl Positions for Offset<'_> {
+    #[inline(always)]
+    fn at(&self, j: usize) -> Vector {
+        self.nodes[j - self.base]
+    }
 }
 
 /// How a node is held over an implicit step.
@@ -325,7 +403,7 @@ impl ModelState {
             solve.refit_rotations(x);
         }
         for sweep in 0..input.iterations {
-            solve.sweep(x, sweep % 2 == 1, |_, _, _, _| {});
+            solve.sweep_alone(x, sweep % 2 == 1);
         }
         let rotations = solve.finish(x, reactions, true);
         self.keep_rotations(rotations);
@@ -384,7 +462,9 @@ impl ModelState {
             Elements::EdgeRepulsion(e) => {
                 vertex.springs = Some(&e.edges);
                 vertex.er = Some(e);
-                let upright = |c: usize, x: &[Vector]| cell_upright(e, incidence, c, x);
+                let upright = |c: usize, x: &[Vector]| {
+                    cell_upright(e, incidence, c, &cell_positions(e, c, x))
+                };
                 let start = Start {
                     x0,
                     given: input.held,
@@ -456,33 +536,114 @@ pub(crate) struct Solve<'a> {
 }
 
 impl Solve<'_> {
-    /// One Gauss–Seidel sweep over the nodes (`backward`: last first; the sweeps alternate,
-    /// as one order only leans the body: a cube on a floor tipped towards its first nodes):
-    /// each free node's Newton step in turn, `extra(i, x, f, block)` adding terms other than
-    /// the body's own (contacts with other bodies) to its force and block.
+    /// One Gauss–Seidel sweep over the nodes in node order (`backward`: last first; the
+    /// sweeps alternate, as one order only leans the body: a cube on a floor tipped towards
+    /// its first nodes): each free node's Newton step in turn, `extra(i, x, f, block)` adding
+    /// terms other than the body's own (contacts with other bodies) to its force and block.
+    /// (Node order passes a contact's push through a lattice in one sweep:
+    /// `docs/ARCHITECTURE.md` §4.2.)
     pub fn sweep(
         &self,
         x: &mut [Vector],
         backward: bool,
         mut extra: impl FnMut(usize, &[Vector], &mut Vector, &mut Matrix),
     ) {
+        in_order(0..x.len(), backward, |i| {
+            let x_now: &[Vector] = x;
+            if let Some(p) = self.node_step(i, x_now, |f, block| extra(i, x_now, f, block)) {
+                x[i] = p;
+            }
+        });
+    }
+
+    /// [`Solve::sweep`] without other terms, by slabs of consecutive nodes
+    /// ([`Incidence::slab`]): the even slabs, then the odd ones (`backward`: the odd ones
+    /// first, each slab last node first), each slab in node order. No term joins two slabs of
+    /// one kind, so the slabs of a kind may go at once on rayon's threads (feature `parallel`):
+    /// each reads only its own nodes and its neighbours', which none of the others writes, and
+    /// the sweep ends where the serial one does, bit for bit, whatever the thread count. Within
+    /// a slab the order is the node order, which on a lattice passes a push from one side of
+    /// the body to the other in one sweep (`docs/ARCHITECTURE.md` §4.2).
+    pub fn sweep_alone(&self, x: &mut [Vector], backward: bool) {
         let n = x.len();
-        let h = self.h;
-        for j in 0..n {
-            let i = if backward { n - 1 - j } else { j };
-            let hold = self.held[i];
-            if matches!(hold, Hold::At(_)) {
+        let slabs = self.vertex.incidence.slabs(n);
+        let kinds = if backward { [1, 0] } else { [0, 1] };
+        for kind in kinds {
+            #[cfg(feature = "parallel")]
+            if rayon::current_num_threads() > 1 && self.vertex.incidence.slab < n {
+                self.sweep_kind_parallel(x, kind, backward);
                 continue;
             }
-            let inertia = self.masses[i] / (h * h);
-            let (mut f, mut block) = self.vertex.newton(i, x, inertia, self.y[i]);
-            extra(i, x, &mut f, &mut block);
-            let Some(inverse) = invert(block) else {
-                continue;
-            };
-            let step = hold.constrained_step(x[i], inverse, f);
-            x[i] = self.vertex.line_search(i, x, step, hold);
+            for slab in slabs.clone().skip(kind).step_by(2) {
+                self.sweep_slab(slab, backward, x);
+            }
         }
+    }
+
+    /// The slabs of one kind (`kind`: 0 even, 1 odd) at once on rayon's threads.
+    #[cfg(feature = "parallel")]
+    fn sweep_kind_parallel(&self, x: &mut [Vector], kind: usize, backward: bool) {
+        use rayon::prelude::*;
+        let slab = self.vertex.incidence.slab;
+        let mut chunks: Vec<&mut [Vector]> = x.chunks_mut(slab).collect();
+        let mut own: Vec<(usize, &mut [Vector])> = Vec::new();
+        let mut others: Vec<&[Vector]> = Vec::new();
+        for (k, chunk) in chunks.iter_mut().enumerate() {
+            if k % 2 == kind {
+                own.push((k, &mut **chunk));
+                others.push(&[]);
+            } else {
+                others.push(&**chunk);
+            }
+        }
+        // Each slab is swept in a copy of itself and its neighbours (which no slab of its
+        // kind writes), then copied back.
+        own.into_par_iter().for_each(|(k, own)| {
+            let before = if k > 0 { others[k - 1] } else { &[] };
+            let after = others.get(k + 1).copied().unwrap_or(&[]);
+            let base = k * slab - before.len();
+            let mut local = [before, &*own, after].concat();
+            let nodes = k * slab..k * slab + own.len();
+            in_order(nodes, backward, |i| {
+                let window = Offset {
+                    base,
+                    nodes: &local,
+                };
+                if let Some(p) = self.node_step(i, &window, |_, _| {}) {
+                    local[i - base] = p;
+                }
+            });
+            own.copy_from_slice(&local[before.len()..before.len() + own.len()]);
+        });
+    }
+
+    /// Steps the nodes of `slab` in node order (`backward`: last first).
+    fn sweep_slab(&self, slab: Range<usize>, backward: bool, x: &mut [Vector]) {
+        in_order(slab, backward, |i| {
+            if let Some(p) = self.node_step(i, &*x, |_, _| {}) {
+                x[i] = p;
+            }
+        });
+    }
+
+    /// Where node `i`'s Newton step takes it from `x` (line-searched; `None`: it stays).
+    #[inline]
+    fn node_step<P: Positions + ?Sized>(
+        &self,
+        i: usize,
+        x: &P,
+        extra: impl FnOnce(&mut Vector, &mut Matrix),
+    ) -> Option<Vector> {
+        let hold = self.held[i];
+        if matches!(hold, Hold::At(_)) {
+            return None;
+        }
+        let inertia = self.masses[i] / (self.h * self.h);
+        let (mut f, mut block) = self.vertex.newton(i, x, inertia, self.y[i]);
+        extra(&mut f, &mut block);
+        let inverse = invert(block)?;
+        let step = hold.constrained_step(x.at(i), inverse, f);
+        Some(self.vertex.line_search(i, x, step, hold))
     }
 
     /// Refits the held rotations of shape-based cells at `x`.
@@ -547,6 +708,16 @@ impl Solve<'_> {
     }
 }
 
+/// `f(i)` for each node of `nodes`, in order (`backward`: last first).
+#[inline(always)]
+fn in_order(nodes: Range<usize>, backward: bool, f: impl FnMut(usize)) {
+    if backward {
+        nodes.rev().for_each(f);
+    } else {
+        nodes.for_each(f);
+    }
+}
+
 /// The fractions of each free node's inertial motion `h v₀` a step with held nodes may start
 /// from.
 const START_FRACTIONS: [Real; 3] = [1.0, 0.5, 0.0];
@@ -606,11 +777,14 @@ impl Start<'_> {
         &self,
         cells: &[u32],
         arity: usize,
-        upright: impl Fn(usize, &[Vector]) -> bool,
+        upright: impl Fn(usize, &[Vector]) -> bool + Sync,
         x: &mut [Vector],
         held: &mut [Hold],
     ) {
         let count = cells.len() / arity;
+        if threads::all(count, |c| upright(c, x)) {
+            return;
+        }
         // Lifting a node off moves it back up, which can flatten a cell of its that was not:
         // lift until no cell is flat or every contact node of the flat ones is lifted.
         let lift = |x: &mut [Vector], held: &mut [Hold]| {
@@ -684,9 +858,9 @@ impl Start<'_> {
 /// Each shape-based cell vertex's residual `r − q R0` at `x` (one per slot).
 fn shape_residuals(sm: &ShapeMatching, x: &[Vector], rotations: &[Rotation]) -> Vec<Vector> {
     let n = sm.arity();
-    (0..sm.cell_indices().len())
-        .map(|slot| sm.residual(slot / n, slot % n, x, rotations[slot / n]))
-        .collect()
+    threads::collect(sm.cell_indices().len(), |slot| {
+        sm.residual(slot / n, slot % n, x, rotations[slot / n])
+    })
 }
 
 /// The shape-based cells under the implicit step: their rotations as last refitted, and each
@@ -712,8 +886,14 @@ struct Vertex<'a> {
 
 impl Vertex<'_> {
     /// `f_i = −∂G/∂x_i` and the block `H_i` at `x`.
-    fn newton(&self, i: usize, x: &[Vector], inertia: Real, y: Vector) -> (Vector, Matrix) {
-        let mut f = (y - x[i]) * inertia;
+    fn newton<P: Positions + ?Sized>(
+        &self,
+        i: usize,
+        x: &P,
+        inertia: Real,
+        y: Vector,
+    ) -> (Vector, Matrix) {
+        let mut f = (y - x.at(i)) * inertia;
         let mut block = Matrix::IDENTITY * inertia;
         if let Some(s) = self.springs {
             self.add_springs(s, i, x, &mut f, &mut block);
@@ -723,7 +903,7 @@ impl Vertex<'_> {
             // volumetric term.
             for &(cell, a) in self.incidence.cells_of(i) {
                 let (cell, a) = (cell as usize, a as usize);
-                let (d, g) = cell_geometry(er, self.incidence, cell, x);
+                let (d, g) = cell_geometry(self.incidence, cell, &cell_positions(er, cell, x));
                 let (df, db) = repulsion_terms(er, self.incidence, cell, a, (d, &g));
                 f += df;
                 block += db;
@@ -736,7 +916,11 @@ impl Vertex<'_> {
             }
         } else if let Some(volume) = self.volume {
             for &(cell, a) in self.incidence.cells_of(i) {
-                let (df, db) = volume.vertex_terms(cell as usize, a as usize, x);
+                let cell = cell as usize;
+                let ids = &volume.cells()[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
+                let p: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|b| x.at(ids[b] as usize));
+                let (d, g) = math::simplex_gradients(&p);
+                let (df, db) = volume.vertex_terms_at(cell, a as usize, d, &g);
                 f += df;
                 block += db;
             }
@@ -748,7 +932,9 @@ impl Vertex<'_> {
             for &(cell, a) in self.incidence.cells_of(i) {
                 let (cell, a) = (cell as usize, a as usize);
                 let (k, c) = shape.cells.law(cell);
-                let e = shape.cells.residual(cell, a, x, shape.rotations[cell]);
+                let e = shape
+                    .cells
+                    .residual_with(cell, a, |j| x.at(j), shape.rotations[cell]);
                 let c = c / self.h;
                 f -= e * k + (e - shape.start[cell * n + a]) * c;
                 block += hessian::shape_block(n, k + c);
@@ -758,12 +944,20 @@ impl Vertex<'_> {
     }
 
     /// The springs at node `i` (with their dashpots, implicit).
-    fn add_springs(&self, s: &Springs, i: usize, x: &[Vector], f: &mut Vector, block: &mut Matrix) {
+    fn add_springs<P: Positions + ?Sized>(
+        &self,
+        s: &Springs,
+        i: usize,
+        x: &P,
+        f: &mut Vector,
+        block: &mut Matrix,
+    ) {
         for &k in self.incidence.springs_of(i) {
             let k = k as usize;
             let [a, b] = s.pairs[k];
             let j = if a as usize == i { b } else { a } as usize;
-            let d = x[i] - x[j];
+            let (xi, xj) = (x.at(i), x.at(j));
+            let d = xi - xj;
             let l = d.length();
             if l <= Real::MIN_POSITIVE {
                 continue;
@@ -777,7 +971,7 @@ impl Vertex<'_> {
             *block += hessian::radial_block(d, du, ddu);
             // The dashpot, implicit: c/h along the spring, on the step's relative motion.
             let c = s.c[k] / self.h;
-            let moved = (x[i] - self.x0[i]) - (x[j] - self.x0[j]);
+            let moved = (xi - self.x0[i]) - (xj - self.x0[j]);
             *f -= normal * (c * normal.dot(moved));
             *block += math::outer(normal, normal) * c;
         }
@@ -786,8 +980,14 @@ impl Vertex<'_> {
     /// `x_i + α step` with the largest `α ∈ {1, ½, ¼, …}` (ten halvings) that keeps every
     /// repulsion of the node's cells above [`MIN_STEP_HEIGHT`] of its rest height; the node
     /// stays if none does.
-    fn line_search(&self, i: usize, x: &mut [Vector], step: Vector, hold: Hold) -> Vector {
-        let start = x[i];
+    fn line_search<P: Positions + ?Sized>(
+        &self,
+        i: usize,
+        x: &P,
+        step: Vector,
+        hold: Hold,
+    ) -> Vector {
+        let start = x.at(i);
         let simplex_shapes = self
             .shape
             .as_ref()
@@ -795,55 +995,69 @@ impl Vertex<'_> {
         if self.er.is_none() && simplex_shapes.is_none() {
             return hold.project(start + step);
         }
+        // The vertices of a cell, node `i` at `p`.
+        let at = |ids: &[u32], p: Vector| -> [Vector; SIMPLEX_ARITY] {
+            std::array::from_fn(|a| {
+                let j = ids[a] as usize;
+                if j == i {
+                    p
+                } else {
+                    x.at(j)
+                }
+            })
+        };
         // A cell that the held nodes left flatter than the bound may not get flatter (else
         // it could never come back: every move of its free vertices would be refused).
-        let not_flatter = |x: &mut [Vector], measure: &dyn Fn(&[Vector]) -> Real| {
-            let after = measure(x);
-            let end = std::mem::replace(&mut x[i], start);
-            let before = measure(x);
-            x[i] = end;
-            after >= before
-        };
-        let upright = |x: &mut [Vector], cell: usize| match (self.er, simplex_shapes) {
+        let upright = |cell: usize, p: Vector| match (self.er, simplex_shapes) {
             (Some(er), _) => {
-                cell_upright(er, self.incidence, cell, x)
-                    || not_flatter(x, &|x| height_ratio(er, self.incidence, cell, x))
+                let ids = &er.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
+                let (now, then) = (at(ids, p), at(ids, start));
+                let incidence = self.incidence;
+                cell_upright(er, incidence, cell, &now)
+                    || height_ratio(er, incidence, cell, &now)
+                        >= height_ratio(er, incidence, cell, &then)
             }
             (None, Some(shape)) => {
-                shape.cells.volume_ratio(cell, x) > MIN_STEP_VOLUME
-                    || not_flatter(x, &|x| shape.cells.volume_ratio(cell, x))
+                let n = SIMPLEX_ARITY;
+                let ids = &shape.cells.cell_indices()[cell * n..(cell + 1) * n];
+                let now = shape.cells.volume_ratio_of(cell, &at(ids, p));
+                now > MIN_STEP_VOLUME || now >= shape.cells.volume_ratio_of(cell, &at(ids, start))
             }
             (None, None) => true,
         };
         let cells = self.incidence.cells_of(i);
         let mut alpha = 1.0;
         for _ in 0..=10 {
-            x[i] = hold.project(start + step * alpha);
-            let ok = cells.iter().all(|&(cell, _)| upright(x, cell as usize));
-            if ok {
-                let end = x[i];
-                x[i] = start;
-                return end;
+            let p = hold.project(start + step * alpha);
+            if cells.iter().all(|&(cell, _)| upright(cell as usize, p)) {
+                return p;
             }
             alpha *= 0.5;
         }
-        x[i] = start;
         start
     }
 }
 
-/// The positions of `cell`'s vertices, `D` and its gradients ([`math::simplex_gradients`]),
-/// `D` signed so that it is positive on the rest side.
+/// The positions of `cell`'s vertices.
+#[inline(always)]
+fn cell_positions<P: Positions + ?Sized>(
+    er: &EdgeRepulsion,
+    cell: usize,
+    x: &P,
+) -> [Vector; SIMPLEX_ARITY] {
+    let ids = &er.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
+    std::array::from_fn(|a| x.at(ids[a] as usize))
+}
+
+/// `D` of a cell at vertex positions `p` and its gradients ([`math::simplex_gradients`]), `D`
+/// signed so that it is positive on the rest side.
 #[inline(always)]
 fn cell_geometry(
-    er: &EdgeRepulsion,
     incidence: &Incidence,
     cell: usize,
-    x: &[Vector],
+    p: &[Vector; SIMPLEX_ARITY],
 ) -> (Real, [Vector; SIMPLEX_ARITY]) {
-    let ids = &er.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
-    let p: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
-    let (d, g) = math::simplex_gradients(&p);
+    let (d, g) = math::simplex_gradients(p);
     (d * incidence.cell_sign[cell], g)
 }
 
@@ -884,10 +1098,15 @@ fn repulsion_terms(
     (f, block)
 }
 
-/// Whether every repulsion of `cell` keeps its vertex above [`MIN_STEP_HEIGHT`] of its rest
-/// height, on the rest side.
-fn cell_upright(er: &EdgeRepulsion, incidence: &Incidence, cell: usize, x: &[Vector]) -> bool {
-    let (d, g) = cell_geometry(er, incidence, cell, x);
+/// Whether every repulsion of `cell` (its vertices at `p`) keeps its vertex above
+/// [`MIN_STEP_HEIGHT`] of its rest height, on the rest side.
+fn cell_upright(
+    er: &EdgeRepulsion,
+    incidence: &Incidence,
+    cell: usize,
+    p: &[Vector; SIMPLEX_ARITY],
+) -> bool {
+    let (d, g) = cell_geometry(incidence, cell, p);
     d > 0.0
         && g.iter().enumerate().all(|(b, gb)| {
             let h_min = MIN_STEP_HEIGHT * er.h0[cell * SIMPLEX_ARITY + b];
@@ -895,9 +1114,15 @@ fn cell_upright(er: &EdgeRepulsion, incidence: &Incidence, cell: usize, x: &[Vec
         })
 }
 
-/// The smallest height of `cell`'s vertices over their rest heights (negative once inverted).
-fn height_ratio(er: &EdgeRepulsion, incidence: &Incidence, cell: usize, x: &[Vector]) -> Real {
-    let (d, g) = cell_geometry(er, incidence, cell, x);
+/// The smallest height of `cell`'s vertices (at `p`) over their rest heights (negative once
+/// inverted).
+fn height_ratio(
+    er: &EdgeRepulsion,
+    incidence: &Incidence,
+    cell: usize,
+    p: &[Vector; SIMPLEX_ARITY],
+) -> Real {
+    let (d, g) = cell_geometry(incidence, cell, p);
     g.iter()
         .enumerate()
         .map(|(b, gb)| d / (gb.length() * er.h0[cell * SIMPLEX_ARITY + b]).max(Real::MIN_POSITIVE))
@@ -923,6 +1148,33 @@ mod tests {
             .flat_map(|c| (0..math::DIM).map(move |r| (c, r)))
             .map(|(c, r)| (a.col(c)[r] - b.col(c)[r]).abs())
             .fold(0.0, Real::max)
+    }
+
+    #[test]
+    fn a_large_body_sweeps_by_slabs_that_no_term_spans_beyond_a_neighbour() {
+        let (small, large) = if math::DIM == 3 { (9, 17) } else { (30, 60) };
+        for (res, slabbed) in [(small, false), (large, true)] {
+            let body = DeformableBuilder::cuboid(Vector::splat(0.5), [res; math::DIM])
+                .model(ElementModel::EdgeRepulsion)
+                .build()
+                .unwrap();
+            let Elements::EdgeRepulsion(er) = &body.state.elements.elements else {
+                unreachable!()
+            };
+            let n = body.state.positions.len();
+            let incidence = Incidence::of(&body.state.elements.elements, None, n).unwrap();
+            let slab = incidence.slab;
+            assert_eq!(slab < n, slabbed, "res {res}: slab {slab} of {n} nodes");
+            if !slabbed {
+                continue;
+            }
+            assert!(n.div_ceil(slab) >= MIN_SLABS && slab >= MIN_SLAB_NODES);
+            for ids in er.cells.chunks_exact(SIMPLEX_ARITY) {
+                let slabs = ids.iter().map(|&i| i as usize / slab);
+                let (low, high) = (slabs.clone().min().unwrap(), slabs.max().unwrap());
+                assert!(high - low <= 1, "cell {ids:?} spans slabs {low}..={high}");
+            }
+        }
     }
 
     #[test]
@@ -971,7 +1223,7 @@ mod tests {
                         block += blocks[m + 1];
                     }
                 }
-                let (d, g) = cell_geometry(er, &incidence, cell, &x);
+                let (d, g) = cell_geometry(&incidence, cell, &cell_positions(er, cell, &x[..]));
                 let (f2, block2) = repulsion_terms(er, &incidence, cell, a, (d, &g));
                 let scale = f.length().max(1e-3);
                 assert!(

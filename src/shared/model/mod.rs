@@ -69,7 +69,7 @@ pub(crate) use implicit::{Hold, Solve, StepInput, MIN_STEP_VOLUME};
 
 use super::error::BuildError;
 use super::material::{Resolved, Stiffness};
-use super::math::{Real, Rotation, Vector};
+use super::math::{Real, Rotation, Vector, SIMPLEX_ARITY};
 use super::mesh::{CellKind, Mesh};
 
 /// How the shape-based element finds its cell's rotation.
@@ -328,8 +328,11 @@ impl ModelState {
     /// own limiter allows (infinite when it has none).
     pub fn accumulate(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
         let limit = self.accumulate_elements(x, v, acc);
+        // Edge repulsion evaluates the volumetric term in its own pass over the cells.
         if let Some(volume) = &self.volume {
-            volume.accumulate(x, acc);
+            if !matches!(self.elements, Elements::EdgeRepulsion(_)) {
+                volume.accumulate(x, acc);
+            }
         }
         limit
     }
@@ -338,7 +341,8 @@ impl ModelState {
         #[cfg(feature = "parallel")]
         if let Some(split) = &mut self.split {
             if rayon::current_num_threads() > 1 {
-                return split.accumulate(&mut self.elements, &self.bounds, x, v, acc);
+                let volume = self.volume.as_ref();
+                return split.accumulate(&mut self.elements, volume, &self.bounds, x, v, acc);
             }
         }
         self.accumulate_serial(x, v, acc)
@@ -363,7 +367,7 @@ impl ModelState {
                 s.accumulate(x, v, acc);
                 Real::INFINITY
             }
-            Elements::EdgeRepulsion(s) => s.accumulate(x, v, acc),
+            Elements::EdgeRepulsion(s) => s.accumulate(x, v, acc, self.volume.as_ref()),
             Elements::ShapeMatching(s) => {
                 s.accumulate(x, v, acc);
                 Real::INFINITY
@@ -398,15 +402,24 @@ impl ModelState {
     }
 }
 
-/// Elastic (stored) energy of `elements` and the volumetric term at `x`.
+/// Elastic (stored) energy of `elements` and the volumetric term at `x`, summed by
+/// [`threads::chunked_sum`] (on rayon's threads for a large body, the same bits whatever the
+/// thread count).
 fn elastic_energy(elements: &Elements, volume: Option<&volume::Volume>, x: &[Vector]) -> Real {
-    volume.map_or(0.0, |v| v.elastic_energy(x))
-        + match elements {
-            Elements::Springs(s) | Elements::NonlinearSprings(s) => s.elastic_energy(x),
-            Elements::CentroidSprings(s) => s.elastic_energy(x),
-            Elements::EdgeRepulsion(s) => s.elastic_energy(x),
-            Elements::ShapeMatching(s) => s.elastic_energy(x),
+    use super::threads::chunked_sum;
+    volume.map_or(0.0, |v| {
+        chunked_sum(v.cells().len() / SIMPLEX_ARITY, |r| v.energy_of(x, r))
+    }) + match elements {
+        Elements::Springs(s) | Elements::NonlinearSprings(s) => {
+            chunked_sum(s.pairs.len(), |r| s.energy_of(x, r))
         }
+        Elements::CentroidSprings(s) => s.elastic_energy(x),
+        Elements::EdgeRepulsion(s) => {
+            chunked_sum(s.edges.pairs.len(), |r| s.edges.energy_of(x, r))
+                + chunked_sum(s.h0.len() / SIMPLEX_ARITY, |r| s.cell_energy(x, r))
+        }
+        Elements::ShapeMatching(s) => chunked_sum(s.rotations().len(), |r| s.energy_of(x, r)),
+    }
 }
 
 /// The Poisson's ratio of a model's lattice (`Mesh::cuboid`'s mirrored Kuhn simplices, small

@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use super::super::math::{Real, Vector};
 use super::super::mesh::Mesh;
+use super::volume::Volume;
 use super::{Accumulator, Elements, NodeBounds, PARALLEL_MIN_WORK};
 
 /// Springs (and nodes) per rayon task: enough work per task that splitting costs little,
@@ -111,6 +112,7 @@ impl Split {
     pub fn accumulate(
         &mut self,
         elements: &mut Elements,
+        volume: Option<&Volume>,
         bounds: &NodeBounds,
         x: &[Vector],
         v: &[Vector],
@@ -133,7 +135,7 @@ impl Split {
             }
             Elements::EdgeRepulsion(s) => {
                 s.edges.evaluate(x, v, spring_force, &mut []);
-                s.evaluate_cells(x, v, slot_force, stiffness)
+                s.evaluate_cells(x, v, slot_force, stiffness, volume)
             }
             Elements::ShapeMatching(s) => {
                 s.evaluate_cells(x, v, slot_force, stiffness);

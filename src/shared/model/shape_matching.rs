@@ -40,6 +40,7 @@
 use super::super::material::Resolved;
 use super::super::math::{self, Real, Rotation, Vector, SIMPLEX_ARITY};
 use super::super::mesh::{CellKind, Mesh};
+use super::super::threads;
 use super::{Accumulator, NodeBounds, RotationFit, ShapeDamping};
 
 /// Calibration constant `s` of the shape-based material mapping: 747/187 in 3D, 7/3 in 2D
@@ -152,6 +153,8 @@ pub(crate) struct ShapeMatching {
     /// Per cell: `Σ_b |R0_b|`, and the smallest singular pair sum of `Σ R0 R0ᵀ` at rest.
     rest_sum: Vec<Real>,
     rest_pair: Vec<Real>,
+    /// Per simplex cell, its signed rest volume (empty for cubes).
+    rest_volume: Vec<Real>,
     rotations: Vec<Rotation>,
     fit: RotationFit,
     damping: ShapeDamping,
@@ -176,6 +179,7 @@ impl ShapeMatching {
             c: Vec::new(),
             rest_sum: Vec::new(),
             rest_pair: Vec::new(),
+            rest_volume: Vec::new(),
             rotations: vec![initial; mesh.num_cells()],
             fit,
             damping,
@@ -196,6 +200,11 @@ impl ShapeMatching {
             }
             out.rest_sum.push(sum);
             out.rest_pair.push(math::least_singular_pair_sum(a));
+            if arity == SIMPLEX_ARITY {
+                let rest = &out.rest[cell * arity..];
+                let rest: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| rest[a]);
+                out.rest_volume.push(math::simplex_volume(&rest));
+            }
             let v = mesh.rest_volumes()[cell];
             let material_k = MATERIAL_SCALE * params.material.young_modulus * v / spread;
             let (k, c) = params.k_c(material_k, params.material.density * v / arity as Real);
@@ -341,10 +350,12 @@ impl ShapeMatching {
             });
     }
 
-    pub fn elastic_energy(&self, x: &[Vector]) -> Real {
+    /// The elastic energy of cells `cells`.
+    pub fn energy_of(&self, x: &[Vector], cells: std::ops::Range<usize>) -> Real {
         let n = self.arity;
         let mut e = 0.0;
-        for (cell, ids) in self.cells.chunks_exact(n).enumerate() {
+        for cell in cells {
+            let ids = &self.cells[cell * n..(cell + 1) * n];
             let o = x[ids[0] as usize];
             let xc = ids.iter().map(|&i| x[i as usize] - o).sum::<Vector>() / n as Real;
             let q = self.rotations[cell];
@@ -404,18 +415,30 @@ impl ShapeMatching {
     /// Vertex `a`'s residual `r_a − q R0_a` in `cell` at `x`, offsets from the centroid.
     #[inline]
     pub(super) fn residual(&self, cell: usize, a: usize, x: &[Vector], q: Rotation) -> Vector {
+        self.residual_with(cell, a, |i| x[i], q)
+    }
+
+    /// [`ShapeMatching::residual`] with node `i` at `x(i)`.
+    #[inline(always)]
+    pub(super) fn residual_with(
+        &self,
+        cell: usize,
+        a: usize,
+        x: impl Fn(usize) -> Vector,
+        q: Rotation,
+    ) -> Vector {
         let n = self.arity;
         let ids = &self.cells[cell * n..(cell + 1) * n];
-        let o = x[ids[0] as usize];
-        let xc = ids.iter().map(|&i| x[i as usize] - o).sum::<Vector>() / n as Real;
-        (x[ids[a] as usize] - o) - xc - q * self.rest[cell * n + a]
+        let o = x(ids[0] as usize);
+        let xc = ids.iter().map(|&i| x(i as usize) - o).sum::<Vector>() / n as Real;
+        (x(ids[a] as usize) - o) - xc - q * self.rest[cell * n + a]
     }
 
     /// Refits every cell's rotation at `x`, each from its value in `rotations`.
     pub(super) fn refit(&self, x: &[Vector], rotations: &mut [Rotation]) {
         let n = self.arity;
-        let mut r = [Vector::ZERO; CUBE_ARITY];
-        for (cell, q) in rotations.iter_mut().enumerate() {
+        threads::for_each_mut(rotations, |cell, q| {
+            let mut r = [Vector::ZERO; CUBE_ARITY];
             let ids = &self.cells[cell * n..(cell + 1) * n];
             let o = x[ids[0] as usize];
             let xc = ids.iter().map(|&i| x[i as usize] - o).sum::<Vector>() / n as Real;
@@ -424,16 +447,19 @@ impl ShapeMatching {
             }
             let rest = &self.rest[cell * n..(cell + 1) * n];
             *q = fit_rotation(rest, &r[..n], self.fit, *q);
-        }
+        });
     }
 
     /// A simplex cell's signed volume at `x` over its rest volume.
     pub(super) fn volume_ratio(&self, cell: usize, x: &[Vector]) -> Real {
         let n = self.arity;
         let ids = &self.cells[cell * n..(cell + 1) * n];
-        let now: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
-        let rest: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| self.rest[cell * n + a]);
-        math::simplex_volume(&now) / math::simplex_volume(&rest)
+        self.volume_ratio_of(cell, &std::array::from_fn(|a| x[ids[a] as usize]))
+    }
+
+    /// [`ShapeMatching::volume_ratio`] with the cell's vertices at `now`.
+    pub(super) fn volume_ratio_of(&self, cell: usize, now: &[Vector; SIMPLEX_ARITY]) -> Real {
+        math::simplex_volume(now) / self.rest_volume[cell]
     }
 
     /// Stiffness and damping per vertex of `cell`.

@@ -200,8 +200,13 @@ impl Springs {
     }
 
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
+        self.energy_of(x, 0..self.pairs.len())
+    }
+
+    /// The elastic energy of springs `springs`.
+    pub fn energy_of(&self, x: &[Vector], springs: std::ops::Range<usize>) -> Real {
         let mut e = 0.0;
-        for s in 0..self.pairs.len() {
+        for s in springs {
             let [i, j] = self.pairs[s];
             let l = x[i as usize].distance(x[j as usize]);
             e += match self.law {

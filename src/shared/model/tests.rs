@@ -89,7 +89,15 @@ fn serial_and_split(
         a.push(bits(&acc, limit));
         let mut acc = Accumulator::new(n);
         let limit = pool.install(|| {
-            split.accumulate(&mut parallel.elements, &parallel.bounds, &x, &v, &mut acc)
+            let volume = parallel.volume.as_ref();
+            split.accumulate(
+                &mut parallel.elements,
+                volume,
+                &parallel.bounds,
+                &x,
+                &v,
+                &mut acc,
+            )
         });
         b.push(bits(&acc, limit));
         for (x, v) in x.iter_mut().zip(&v) {

@@ -88,21 +88,37 @@ impl Volume {
     /// Adds the forces and their stiffness bounds (`|κ| V0 |g_a| Σ_b |g_b| / D0²`, the
     /// Gershgorin row of `κ V0 ∇J ∇Jᵀ`).
     pub fn accumulate(&self, x: &[Vector], acc: &mut Accumulator) {
-        for cell in 0..self.d0.len() {
-            let (strain, g, k) = self.at(cell, x);
-            let ids = &self.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
-            let sum: Real = g.iter().map(|g| g.length()).sum();
-            let row = (k / self.d0[cell]).abs() * sum;
+        for (cell, ids) in self.cells.as_chunks::<SIMPLEX_ARITY>().0.iter().enumerate() {
+            let p = std::array::from_fn(|a| x[ids[a] as usize]);
+            let (force, row) = self.cell_terms(cell, &p);
             for (a, &i) in ids.iter().enumerate() {
-                acc.force[i as usize] -= g[a] * (k * strain);
-                acc.stiffness[i as usize] += row * g[a].length();
+                acc.force[i as usize] += force[a];
+                acc.stiffness[i as usize] += row[a];
             }
         }
     }
 
+    /// Cell `cell`, its vertices at `p`: the force on each vertex and its stiffness bound.
+    #[inline(always)]
+    pub fn cell_terms(
+        &self,
+        cell: usize,
+        p: &[Vector; SIMPLEX_ARITY],
+    ) -> ([Vector; SIMPLEX_ARITY], [Real; SIMPLEX_ARITY]) {
+        let (d, g) = math::simplex_gradients(p);
+        let d0 = self.d0[cell];
+        let (strain, k) = (d / d0 - 1.0, self.k[cell] / d0);
+        let length: [Real; SIMPLEX_ARITY] = std::array::from_fn(|a| g[a].length());
+        let row = (k / d0).abs() * length.iter().sum::<Real>();
+        (
+            std::array::from_fn(|a| -(g[a] * (k * strain))),
+            std::array::from_fn(|a| row * length[a]),
+        )
+    }
+
     /// Vertex `a` of `cell`: `−∂E/∂x_a` and its Gauss–Newton block `κ V0 ∇_a J ∇_a Jᵀ` (left
     /// out for a negative `κ`).
-    #[inline]
+    #[cfg(test)]
     pub fn vertex_terms(&self, cell: usize, a: usize, x: &[Vector]) -> (Vector, Matrix) {
         let ids = &self.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
         let p: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
@@ -129,8 +145,14 @@ impl Volume {
         (-g[a] * (k * strain), block)
     }
 
+    #[cfg(test)]
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
-        (0..self.d0.len())
+        self.energy_of(x, 0..self.d0.len())
+    }
+
+    /// The elastic energy of cells `cells`.
+    pub fn energy_of(&self, x: &[Vector], cells: std::ops::Range<usize>) -> Real {
+        cells
             .map(|cell| {
                 let (strain, _, k) = self.at(cell, x);
                 0.5 * k * self.d0[cell] * strain * strain

@@ -13,8 +13,8 @@
 use super::super::super::math::{self, AngVector, Matrix, Real, Vector, DIM, SIMPLEX_ARITY};
 use super::hessian;
 use super::{
-    cell_geometry, cell_upright, height_ratio, invert, unit, Hold, Law, Solve, MIN_HEIGHT_RATIO,
-    MIN_STEP_VOLUME,
+    cell_geometry, cell_positions, cell_upright, height_ratio, invert, unit, Hold, Law, Solve,
+    MIN_HEIGHT_RATIO, MIN_STEP_VOLUME,
 };
 
 /// An edge-repulsion term's Gauss–Newton Hessian `k (s ⊗ g)(s ⊗ g)ᵀ`: at each vertex `a` of
@@ -502,7 +502,7 @@ impl Solve<'_> {
         if let Some(er) = vertex.er {
             cells = &er.cells;
             for cell in 0..er.cells.len() / SIMPLEX_ARITY {
-                let (d, g) = cell_geometry(er, vertex.incidence, cell, x);
+                let (d, g) = cell_geometry(vertex.incidence, cell, &cell_positions(er, cell, x));
                 for (b, gb) in g.iter().enumerate() {
                     let g2 = gb.length_squared();
                     if g2 <= Real::MIN_POSITIVE {
@@ -605,10 +605,11 @@ impl Solve<'_> {
         };
         let incidence = vertex.incidence;
         (0..er.cells.len() / SIMPLEX_ARITY).all(|c| {
-            if cell_upright(er, incidence, c, from) {
-                cell_upright(er, incidence, c, to)
+            let (from, to) = (cell_positions(er, c, from), cell_positions(er, c, to));
+            if cell_upright(er, incidence, c, &from) {
+                cell_upright(er, incidence, c, &to)
             } else {
-                height_ratio(er, incidence, c, to) >= height_ratio(er, incidence, c, from)
+                height_ratio(er, incidence, c, &to) >= height_ratio(er, incidence, c, &from)
             }
         })
     }
