@@ -55,14 +55,15 @@ impl Incidence {
 /// Every contribution of a term to one of its nodes is an *entry*: spring `s` has entries
 /// `2s` (its first node, `+f`) and `2s + 1` (its second, `−f`); after the `2S` spring entries
 /// come the cell slots, `2S + cell · n + a`. Entries are numbered in the serial loop's order,
-/// so summing a node's entries in increasing order repeats the serial sums exactly.
+/// so summing a node's entries in increasing order repeats the serial sums exactly. A spring
+/// stores its force once (`force[s]`, the second node subtracts it), a slot at `S + slot`.
 #[derive(Clone, Debug)]
 pub(crate) struct Split {
     /// Node → its entries.
     nodes: Incidence,
     /// Number of spring entries (`2S`).
     spring_entries: usize,
-    /// The force of each entry.
+    /// The force of each spring, then of each cell slot.
     force: Vec<Vector>,
     /// The stiffness row bound of entries `stiffness_from..`, for the terms whose bound
     /// changes with the state: nonlinear springs (`stiffness_from = 0`), the repulsions of the
@@ -101,7 +102,7 @@ impl Split {
         Split {
             nodes,
             spring_entries,
-            force: vec![Vector::ZERO; entries],
+            force: vec![Vector::ZERO; entries - spring_entries / 2],
             stiffness: vec![0.0; entries - stiffness_from],
             stiffness_from,
         }
@@ -120,8 +121,7 @@ impl Split {
     ) -> Real {
         assert!(v.len() == x.len() && acc.force.len() == x.len());
         assert!(acc.stiffness.len() == x.len() && acc.damping.len() == x.len());
-        let (spring_force, slot_force) = self.force.split_at_mut(self.spring_entries);
-        let (spring_force, _) = spring_force.as_chunks_mut::<2>();
+        let (spring_force, slot_force) = self.force.split_at_mut(self.spring_entries / 2);
         let stiffness = &mut self.stiffness;
         let limit = match elements {
             Elements::Springs(s) | Elements::NonlinearSprings(s) => {
@@ -164,9 +164,19 @@ impl Split {
                 let out = force.iter_mut().zip(stiffness).zip(damping);
                 for (a, (((f, k), c), (k_const, c_const))) in out.zip(constant).enumerate() {
                     let entries = self.nodes.of(first + a);
+                    let springs = self.spring_entries;
+                    let cells = entries.partition_point(|&e| (e as usize) < springs);
                     let mut force = *f;
-                    for &e in entries {
-                        force += self.force[e as usize];
+                    for &e in &entries[..cells] {
+                        let spring = self.force[e as usize >> 1];
+                        if e & 1 == 0 {
+                            force += spring;
+                        } else {
+                            force -= spring;
+                        }
+                    }
+                    for &e in &entries[cells..] {
+                        force += self.force[e as usize - springs / 2];
                     }
                     *f = force;
                     let mut stiffness = *k + *k_const;

@@ -149,15 +149,15 @@ impl Springs {
         }
     }
 
-    /// Writes each spring's forces on its two nodes (`[f, −f]`) into `force` and, for the
-    /// nonlinear law, its row bound on both into `stiffness` (ignored for the linear law), on
-    /// rayon's threads.
+    /// Writes each spring's force on its first node (the second takes `−f`) into `force` and,
+    /// for the nonlinear law, its row bound on both into `stiffness` (ignored for the linear
+    /// law), on rayon's threads.
     #[cfg(feature = "parallel")]
     pub fn evaluate(
         &self,
         x: &[Vector],
         v: &[Vector],
-        force: &mut [[Vector; 2]],
+        force: &mut [Vector],
         stiffness: &mut [[Real; 2]],
     ) {
         use super::parallel::TERMS_PER_TASK as CHUNK;
@@ -170,8 +170,7 @@ impl Springs {
                 .for_each(|(t, force)| {
                     for (f, (((&pair, &l0), &k), &c)) in force.iter_mut().zip(self.terms(t * CHUNK))
                     {
-                        let (fi, _) = term::<false>(pair, l0, k, c, x, v);
-                        *f = [fi, -fi];
+                        (*f, _) = term::<false>(pair, l0, k, c, x, v);
                     }
                 }),
             Law::Nonlinear => force
@@ -181,8 +180,9 @@ impl Springs {
                 .for_each(|(t, (force, stiffness))| {
                     let out = force.iter_mut().zip(stiffness);
                     for ((f, k_row), (((&pair, &l0), &k), &c)) in out.zip(self.terms(t * CHUNK)) {
-                        let (fi, ki) = term::<true>(pair, l0, k, c, x, v);
-                        (*f, *k_row) = ([fi, -fi], [ki, ki]);
+                        let ki;
+                        (*f, ki) = term::<true>(pair, l0, k, c, x, v);
+                        *k_row = [ki, ki];
                     }
                 }),
         }
