@@ -51,8 +51,14 @@ fn steps_do_not_depend_on_the_thread_count() {
     let resolution = if DIM == 2 { 36 } else { 8 };
     for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
         let one = fall_state(model, resolution, 1, 5);
-        let two = fall_state(model, resolution, 2, 5);
-        assert!(one == two, "{}: 1 and 2 threads differ", model.name());
+        for threads in [2, 16] {
+            let many = fall_state(model, resolution, threads, 5);
+            assert!(
+                one == many,
+                "{}: 1 and {threads} threads differ",
+                model.name()
+            );
+        }
     }
 }
 
