@@ -13,7 +13,8 @@
 //!   later feeds energy into the pair), and the opposite impulse goes to the body at the
 //!   anchor. All the nodes bound to one body are solved with it at once (the body's velocity
 //!   the unknown of one small dense solve), so however light the body, it moves as its nodes
-//!   together pull it. Linear and angular momentum of nodes + body are conserved exactly.
+//!   together pull it. Linear momentum of nodes + body is conserved exactly; angular momentum
+//!   up to the impulses' moment over each node's position error (they act at the anchors).
 //!
 //! Bound nodes are not tested against colliders as nodes. A surface facet with bound nodes
 //! still meets rigid features; its bound nodes count with zero inverse mass there (the bone
@@ -269,7 +270,7 @@ pub(crate) fn drive_bones(
 /// The nodes `rows` (node, anchor now, correcting velocity) bound to the dynamic body `rb`,
 /// solved as one: the body's velocity `V` is the unknown, each node takes the velocity `V`
 /// gives its anchor plus its correction, and the body the opposite of the nodes' impulses,
-/// `V = V₀ − M⁻¹ Σ Jᵀ λ(V)`, linear in `V` (one dense solve). Momentum is conserved.
+/// `V = V₀ − M⁻¹ Σ Jᵀ λ(V)`, linear in `V` (one dense solve). Linear momentum is conserved.
 fn solve_bound_body(
     rb: &mut RigidBody,
     rows: &[(usize, Vector, Vector)],
