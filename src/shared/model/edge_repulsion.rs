@@ -115,6 +115,8 @@ pub fn repulsion(c: Vector, facet: &[Vector], side: Real, h0: Real, k: Real) -> 
 pub(crate) struct EdgeRepulsion {
     pub edges: Springs,
     pub(super) cells: Vec<u32>,
+    /// Per cell: the sign of its rest `D` ([`math::simplex_gradients`]).
+    sign: Vec<Real>,
     /// Per cell vertex: rest height, side sign, repulsion stiffness.
     pub(super) h0: Vec<Real>,
     pub(super) side: Vec<Real>,
@@ -154,11 +156,14 @@ impl EdgeRepulsion {
         let mut out = EdgeRepulsion {
             edges,
             cells: mesh.cell_indices().to_vec(),
+            sign: Vec::new(),
             h0: Vec::new(),
             side: Vec::new(),
             k: Vec::new(),
         };
         for (cell, ids) in mesh.cells().enumerate() {
+            let rest: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| nodes[ids[a] as usize]);
+            out.sign.push(math::simplex_gradients(&rest).0.signum());
             let v = mesh.rest_volumes()[cell];
             let share = v / SIMPLEX_ARITY as Real;
             for a in 0..SIMPLEX_ARITY {
@@ -203,9 +208,9 @@ impl EdgeRepulsion {
         let n = x.len();
         let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
         let mut limit = Real::INFINITY;
-        for (cell, (((ids, side), h0), k)) in self.cell_data(0).enumerate() {
+        for (cell, (((ids, sign), h0), k)) in self.cell_data(0).enumerate() {
             let (f, k_row, cell_limit) =
-                cell_terms(ids, side, h0, k, x, v, volume.map(|v| (v, cell)));
+                cell_terms(ids, sign, h0, k, x, v, volume.map(|v| (v, cell)));
             for a in 0..SIMPLEX_ARITY {
                 let i = ids[a] as usize;
                 force[i] += f[a];
@@ -241,11 +246,11 @@ impl EdgeRepulsion {
                 let mut limit = Real::INFINITY;
                 let out = force.iter_mut().zip(stiffness);
                 let cells = self.cell_data(t * CHUNK).enumerate();
-                for ((f, k_row), (c, (((ids, side), h0), k))) in out.zip(cells) {
+                for ((f, k_row), (c, (((ids, sign), h0), k))) in out.zip(cells) {
                     let cell_limit;
                     let cell = t * CHUNK + c;
                     (*f, *k_row, cell_limit) =
-                        cell_terms(ids, side, h0, k, x, v, volume.map(|v| (v, cell)));
+                        cell_terms(ids, sign, h0, k, x, v, volume.map(|v| (v, cell)));
                     limit = limit.min(cell_limit);
                 }
                 limit
@@ -253,28 +258,24 @@ impl EdgeRepulsion {
             .reduce(|| Real::INFINITY, Real::min)
     }
 
-    /// From cell `first` on, per cell: its vertex indices and, per vertex, the side sign, rest
-    /// height and stiffness of its repulsion.
+    /// From cell `first` on, per cell: its vertex indices, the sign of its rest `D` and, per
+    /// vertex, the rest height and stiffness of its repulsion.
     #[allow(clippy::type_complexity)]
     fn cell_data(
         &self,
         first: usize,
     ) -> impl Iterator<
         Item = (
-            (
-                (&[u32; SIMPLEX_ARITY], &[Real; SIMPLEX_ARITY]),
-                &[Real; SIMPLEX_ARITY],
-            ),
+            ((&[u32; SIMPLEX_ARITY], &Real), &[Real; SIMPLEX_ARITY]),
             &[Real; SIMPLEX_ARITY],
         ),
     > {
         let (cells, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
-        let (side, _) = self.side.as_chunks::<SIMPLEX_ARITY>();
         let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
         let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
         cells[first..]
             .iter()
-            .zip(&side[first..])
+            .zip(&self.sign[first..])
             .zip(&h0[first..])
             .zip(&k[first..])
     }
@@ -303,13 +304,14 @@ impl EdgeRepulsion {
     }
 }
 
-/// The repulsions of one cell and its `volume` term (the term and the cell's index), summed per vertex: the force on each
-/// vertex, its Gershgorin stiffness row, and the crossing limiter of the cell (infinite when
-/// no vertex approaches its facet).
+/// The repulsions of one cell (`sign`: the sign of its rest `D`) and its `volume` term (the
+/// term and the cell's index), summed per vertex: the force on each vertex, its Gershgorin
+/// stiffness row, and the crossing limiter of the cell (infinite when no vertex approaches its
+/// facet).
 #[inline(always)]
 fn cell_terms(
     ids: &[u32; SIMPLEX_ARITY],
-    side: &[Real; SIMPLEX_ARITY],
+    sign: &Real,
     h0: &[Real; SIMPLEX_ARITY],
     k: &[Real; SIMPLEX_ARITY],
     x: &[Vector],
@@ -318,19 +320,38 @@ fn cell_terms(
 ) -> ([Vector; SIMPLEX_ARITY], [Real; SIMPLEX_ARITY], Real) {
     let xs: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
     let vs: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| v[ids[a] as usize]);
+    // One evaluation of the cell's volume gradients serves every repulsion and the volumetric
+    // term: `g_a` is normal to the facet opposite `a`, `n = sign · g_a / |g_a|` points to `a`'s
+    // rest side, and the foot's weight at facet vertex `b` is `−g_a·g_b / |g_a|²`. The height
+    // is measured along `n` from a facet vertex: `sign · D / |g_a|` is the same height, but
+    // `D`, one product for the whole cell, rounds worse where the strain is small (a 2D bar
+    // ringing at 0.3 % strain came out 11 % low).
+    let (d, g) = math::simplex_gradients(&xs);
+    let sign = *sign;
     let mut force = [Vector::ZERO; SIMPLEX_ARITY];
     let mut stiffness = [0.0; SIMPLEX_ARITY];
     let mut limit = Real::INFINITY;
     for a in 0..SIMPLEX_ARITY {
         let f = OPPOSITE[a];
-        let facet: [Vector; FACET_ARITY] = std::array::from_fn(|m| xs[f[m]]);
-        let r = repulsion(xs[a], &facet, side[a], h0[a], k[a]);
-        let (w, h, k_eff) = (r.weights, r.height, r.stiffness);
-        force[a] += r.force;
+        let g2 = g[a].length_squared();
+        let (push, normal, w, h, k_eff) = if g2 <= Real::MIN_POSITIVE {
+            // The facet collapsed to a point or a line: no direction this substep.
+            let w = [1.0 / FACET_ARITY as Real; FACET_ARITY];
+            (Vector::ZERO, Vector::ZERO, w, 0.0, 2.0 * k[a])
+        } else {
+            let len = g2.sqrt();
+            let normal = g[a] * (sign / len);
+            let h = normal.dot(xs[a] - xs[f[0]]);
+            let hc = h.max(MIN_HEIGHT_RATIO * h0[a]);
+            let w: [Real; FACET_ARITY] = std::array::from_fn(|m| -g[a].dot(g[f[m]]) / g2);
+            let k_eff = k[a] * (1.0 + h0[a] * h0[a] / (hc * hc));
+            (normal * magnitude(h, h0[a], k[a]), normal, w, h, k_eff)
+        };
+        force[a] += push;
         let mut foot_velocity = Vector::ZERO;
         let mut wsum = 1.0;
         for m in 0..FACET_ARITY {
-            force[f[m]] -= r.force * w[m];
+            force[f[m]] -= push * w[m];
             foot_velocity += vs[f[m]] * w[m];
             wsum += w[m].abs();
         }
@@ -341,18 +362,117 @@ fn cell_terms(
         }
         // Crossing limiter.
         if h > 0.0 {
-            let rate = r.normal.dot(vs[a] - foot_velocity);
+            let rate = normal.dot(vs[a] - foot_velocity);
             if rate < 0.0 {
                 limit = limit.min(CROSSING_FRACTION * h / -rate);
             }
         }
     }
     if let Some((volume, cell)) = volume {
-        let (f, k) = volume.cell_terms(cell, &xs);
+        let (f, k) = volume.cell_terms_at(cell, d, &g);
         for a in 0..SIMPLEX_ARITY {
             force[a] += f[a];
             stiffness[a] += k[a];
         }
     }
     (force, stiffness, limit)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::body::DeformableBuilder;
+    use super::super::super::mesh::CellKind;
+    use super::super::{Accumulator, ElementModel, Elements};
+    use super::*;
+
+    #[test]
+    fn the_cell_pass_gives_each_repulsion_its_force_and_bound() {
+        // A lattice squashed to 60 % of its height and sheared, moving: the pass over the
+        // cells (from the cells' volume gradients) must give every node the forces, stiffness
+        // rows and crossing limiter of the repulsions evaluated one by one.
+        let mut half = Vector::splat(0.05);
+        half[0] = 0.5;
+        let mut res = [3; math::DIM];
+        res[0] = 21;
+        let body = DeformableBuilder::cuboid(half, res)
+            .cells(CellKind::Simplex)
+            .model(ElementModel::EdgeRepulsion)
+            .build()
+            .unwrap();
+        let Elements::EdgeRepulsion(er) = &body.state.elements.elements else {
+            unreachable!()
+        };
+        let x: Vec<Vector> = body
+            .state
+            .positions
+            .iter()
+            .map(|p| {
+                let mut q = *p;
+                q[1] *= 0.6;
+                q[0] += 3.0 * p[1];
+                q
+            })
+            .collect();
+        let v: Vec<Vector> = x.iter().map(|p| -*p * 2.0).collect();
+        let n = x.len();
+        let mut acc = Accumulator::new(n);
+        let volume = body
+            .state
+            .elements
+            .volume
+            .as_ref()
+            .expect("ν 0.3 takes a volumetric term");
+        let limit = er.accumulate(&x, &v, &mut acc, Some(volume));
+        let mut force = vec![Vector::ZERO; n];
+        let mut stiffness = vec![0.0; n];
+        let mut expected_limit = Real::INFINITY;
+        for (cell, ids) in er.cells.chunks_exact(SIMPLEX_ARITY).enumerate() {
+            for a in 0..SIMPLEX_ARITY {
+                let s = cell * SIMPLEX_ARITY + a;
+                let f = OPPOSITE[a];
+                let facet: [Vector; FACET_ARITY] = std::array::from_fn(|m| x[ids[f[m]] as usize]);
+                let c = ids[a] as usize;
+                let r = repulsion(x[c], &facet, er.side[s], er.h0[s], er.k[s]);
+                let wsum = 1.0 + r.weights.iter().map(|w| w.abs()).sum::<Real>();
+                force[c] += r.force;
+                stiffness[c] += r.stiffness * wsum;
+                let mut foot = Vector::ZERO;
+                for m in 0..FACET_ARITY {
+                    let j = ids[f[m]] as usize;
+                    force[j] -= r.force * r.weights[m];
+                    stiffness[j] += r.stiffness * r.weights[m].abs() * wsum;
+                    foot += v[j] * r.weights[m];
+                }
+                let rate = r.normal.dot(v[c] - foot);
+                if r.height > 0.0 && rate < 0.0 {
+                    expected_limit = expected_limit.min(CROSSING_FRACTION * r.height / -rate);
+                }
+            }
+        }
+        // Less the edges' and the volumetric term's, only the repulsions are left in `acc`.
+        let mut edges = Accumulator::new(n);
+        er.edges.accumulate(&x, &v, &mut edges);
+        volume.accumulate(&x, &mut edges);
+        let scale = force.iter().map(|f| f.length()).fold(1e-3, Real::max);
+        let k_scale = stiffness.iter().copied().fold(1e-3, Real::max);
+        for i in 0..n {
+            let got = acc.force[i] - edges.force[i];
+            assert!(
+                (got - force[i]).length() < 1e-4 * scale,
+                "node {i}: {got} {}",
+                force[i]
+            );
+            let got = acc.stiffness[i] - edges.stiffness[i];
+            assert!(
+                (got - stiffness[i]).abs() < 1e-4 * k_scale,
+                "node {i}: {got} {}",
+                stiffness[i]
+            );
+        }
+        assert!(
+            (limit / expected_limit - 1.0).abs() < 1e-4,
+            "{limit} {expected_limit}"
+        );
+        assert!(expected_limit.is_finite(), "the cells close");
+    }
 }

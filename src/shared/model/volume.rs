@@ -106,6 +106,17 @@ impl Volume {
         p: &[Vector; SIMPLEX_ARITY],
     ) -> ([Vector; SIMPLEX_ARITY], [Real; SIMPLEX_ARITY]) {
         let (d, g) = math::simplex_gradients(p);
+        self.cell_terms_at(cell, d, &g)
+    }
+
+    /// [`Volume::cell_terms`] from the cell's `D` and its gradients, already evaluated.
+    #[inline(always)]
+    pub fn cell_terms_at(
+        &self,
+        cell: usize,
+        d: Real,
+        g: &[Vector; SIMPLEX_ARITY],
+    ) -> ([Vector; SIMPLEX_ARITY], [Real; SIMPLEX_ARITY]) {
         let d0 = self.d0[cell];
         let (strain, k) = (d / d0 - 1.0, self.k[cell] / d0);
         let length: [Real; SIMPLEX_ARITY] = std::array::from_fn(|a| g[a].length());
