@@ -116,7 +116,7 @@ pub(crate) struct EdgeRepulsion {
     pub edges: Springs,
     pub(super) cells: Vec<u32>,
     /// Per cell: the sign of its rest `D` ([`math::simplex_gradients`]).
-    sign: Vec<Real>,
+    pub(super) sign: Vec<Real>,
     /// Per cell vertex: rest height, side sign, repulsion stiffness.
     pub(super) h0: Vec<Real>,
     pub(super) side: Vec<Real>,

@@ -53,9 +53,9 @@ mod global;
 
 use std::ops::Range;
 
-use super::super::math::{self, Matrix, Real, Rotation, Vector, FACET_ARITY, SIMPLEX_ARITY};
+use super::super::math::{self, Matrix, Real, Rotation, Vector, SIMPLEX_ARITY};
 use super::super::threads;
-use super::edge_repulsion::{EdgeRepulsion, MIN_HEIGHT_RATIO, OPPOSITE};
+use super::edge_repulsion::{EdgeRepulsion, MIN_HEIGHT_RATIO};
 use super::hessian;
 use super::shape_matching::ShapeMatching;
 use super::springs::{Law, Springs};
@@ -76,9 +76,6 @@ pub(crate) struct Incidence {
     springs: Vec<u32>,
     cell_start: Vec<u32>,
     cells: Vec<(u32, u8)>,
-    /// Per edge-repulsion cell, the sign of its rest `D` ([`math::simplex_gradients`]): its
-    /// heights are `sign · D / |g_a|`.
-    cell_sign: Vec<Real>,
     /// Nodes per slab of the sweeps ([`Solve::sweep_alone`]): wider than any term's span of
     /// node indices, so a term touches at most two consecutive slabs; the node count when the
     /// body is too small or its numbering too wide for [`MIN_SLABS`] slabs.
@@ -92,27 +89,19 @@ impl Incidence {
         Some(match elements {
             Elements::Springs(s) | Elements::NonlinearSprings(s) => {
                 let cells = volume.map(|v| (v.cells(), SIMPLEX_ARITY));
-                Self::build(nodes, Some(s), cells, None)
+                Self::build(nodes, Some(s), cells)
             }
-            Elements::EdgeRepulsion(e) => Self::build(
-                nodes,
-                Some(&e.edges),
-                Some((&e.cells, SIMPLEX_ARITY)),
-                Some(e),
-            ),
+            Elements::EdgeRepulsion(e) => {
+                Self::build(nodes, Some(&e.edges), Some((&e.cells, SIMPLEX_ARITY)))
+            }
             Elements::ShapeMatching(s) => {
-                Self::build(nodes, None, Some((s.cell_indices(), s.arity())), None)
+                Self::build(nodes, None, Some((s.cell_indices(), s.arity())))
             }
             Elements::CentroidSprings(_) => return None,
         })
     }
 
-    fn build(
-        nodes: usize,
-        springs: Option<&Springs>,
-        cells: Option<(&[u32], usize)>,
-        er: Option<&EdgeRepulsion>,
-    ) -> Self {
+    fn build(nodes: usize, springs: Option<&Springs>, cells: Option<(&[u32], usize)>) -> Self {
         let mut out = Incidence::default();
         let mut by_node: Vec<Vec<u32>> = vec![Vec::new(); nodes];
         if let Some(s) = springs {
@@ -140,21 +129,6 @@ impl Incidence {
             out.cell_start.push(out.cells.len() as u32);
         }
         out.slab = slab_size(nodes, springs, cells);
-        if let Some(er) = er {
-            // `g_0` is `±` the facet normal of `OPPOSITE[0]` whatever the cell; the sign is the
-            // reference simplex's.
-            let reference: [Vector; SIMPLEX_ARITY] =
-                std::array::from_fn(|a| if a == 0 { Vector::ZERO } else { unit(a - 1) });
-            let facet: [Vector; FACET_ARITY] = std::array::from_fn(|m| reference[OPPOSITE[0][m]]);
-            let (_, g) = math::simplex_gradients(&reference);
-            let relation = g[0].dot(math::facet_normal(&facet)).signum();
-            out.cell_sign = er
-                .side
-                .iter()
-                .step_by(SIMPLEX_ARITY)
-                .map(|s| s * relation)
-                .collect();
-        }
         out
     }
 
@@ -462,9 +436,7 @@ impl ModelState {
             Elements::EdgeRepulsion(e) => {
                 vertex.springs = Some(&e.edges);
                 vertex.er = Some(e);
-                let upright = |c: usize, x: &[Vector]| {
-                    cell_upright(e, incidence, c, &cell_positions(e, c, x))
-                };
+                let upright = |c: usize, x: &[Vector]| cell_upright(e, c, &cell_positions(e, c, x));
                 let start = Start {
                     x0,
                     given: input.held,
@@ -903,12 +875,12 @@ impl Vertex<'_> {
             // volumetric term.
             for &(cell, a) in self.incidence.cells_of(i) {
                 let (cell, a) = (cell as usize, a as usize);
-                let (d, g) = cell_geometry(self.incidence, cell, &cell_positions(er, cell, x));
-                let (df, db) = repulsion_terms(er, self.incidence, cell, a, (d, &g));
+                let (d, g) = cell_geometry(er, cell, &cell_positions(er, cell, x));
+                let (df, db) = repulsion_terms(er, cell, a, (d, &g));
                 f += df;
                 block += db;
                 if let Some(volume) = self.volume {
-                    let raw = d * self.incidence.cell_sign[cell];
+                    let raw = d * er.sign[cell];
                     let (df, db) = volume.vertex_terms_at(cell, a, raw, &g);
                     f += df;
                     block += db;
@@ -1012,10 +984,8 @@ impl Vertex<'_> {
             (Some(er), _) => {
                 let ids = &er.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
                 let (now, then) = (at(ids, p), at(ids, start));
-                let incidence = self.incidence;
-                cell_upright(er, incidence, cell, &now)
-                    || height_ratio(er, incidence, cell, &now)
-                        >= height_ratio(er, incidence, cell, &then)
+                cell_upright(er, cell, &now)
+                    || height_ratio(er, cell, &now) >= height_ratio(er, cell, &then)
             }
             (None, Some(shape)) => {
                 let n = SIMPLEX_ARITY;
@@ -1053,12 +1023,12 @@ fn cell_positions<P: Positions + ?Sized>(
 /// signed so that it is positive on the rest side.
 #[inline(always)]
 fn cell_geometry(
-    incidence: &Incidence,
+    er: &EdgeRepulsion,
     cell: usize,
     p: &[Vector; SIMPLEX_ARITY],
 ) -> (Real, [Vector; SIMPLEX_ARITY]) {
     let (d, g) = math::simplex_gradients(p);
-    (d * incidence.cell_sign[cell], g)
+    (d * er.sign[cell], g)
 }
 
 /// The repulsions of `cell` at its vertex `a`: `−∂E/∂x_a` and the Gauss–Newton block, the
@@ -1068,12 +1038,11 @@ fn cell_geometry(
 #[inline(always)]
 fn repulsion_terms(
     er: &EdgeRepulsion,
-    incidence: &Incidence,
     cell: usize,
     a: usize,
     (d, g): (Real, &[Vector; SIMPLEX_ARITY]),
 ) -> (Vector, Matrix) {
-    let sign = incidence.cell_sign[cell];
+    let sign = er.sign[cell];
     let mut f = Vector::ZERO;
     let mut block = Matrix::ZERO;
     for (b, gb) in g.iter().enumerate() {
@@ -1100,13 +1069,8 @@ fn repulsion_terms(
 
 /// Whether every repulsion of `cell` (its vertices at `p`) keeps its vertex above
 /// [`MIN_STEP_HEIGHT`] of its rest height, on the rest side.
-fn cell_upright(
-    er: &EdgeRepulsion,
-    incidence: &Incidence,
-    cell: usize,
-    p: &[Vector; SIMPLEX_ARITY],
-) -> bool {
-    let (d, g) = cell_geometry(incidence, cell, p);
+fn cell_upright(er: &EdgeRepulsion, cell: usize, p: &[Vector; SIMPLEX_ARITY]) -> bool {
+    let (d, g) = cell_geometry(er, cell, p);
     d > 0.0
         && g.iter().enumerate().all(|(b, gb)| {
             let h_min = MIN_STEP_HEIGHT * er.h0[cell * SIMPLEX_ARITY + b];
@@ -1116,13 +1080,8 @@ fn cell_upright(
 
 /// The smallest height of `cell`'s vertices (at `p`) over their rest heights (negative once
 /// inverted).
-fn height_ratio(
-    er: &EdgeRepulsion,
-    incidence: &Incidence,
-    cell: usize,
-    p: &[Vector; SIMPLEX_ARITY],
-) -> Real {
-    let (d, g) = cell_geometry(incidence, cell, p);
+fn height_ratio(er: &EdgeRepulsion, cell: usize, p: &[Vector; SIMPLEX_ARITY]) -> Real {
+    let (d, g) = cell_geometry(er, cell, p);
     g.iter()
         .enumerate()
         .map(|(b, gb)| d / (gb.length() * er.h0[cell * SIMPLEX_ARITY + b]).max(Real::MIN_POSITIVE))
@@ -1138,8 +1097,9 @@ fn invert(m: Matrix) -> Option<Matrix> {
 #[cfg(test)]
 mod tests {
     use super::super::super::body::DeformableBuilder;
+    use super::super::super::math::FACET_ARITY;
     use super::super::super::mesh::CellKind;
-    use super::super::edge_repulsion::repulsion;
+    use super::super::edge_repulsion::{repulsion, OPPOSITE};
     use super::super::ElementModel;
     use super::*;
 
@@ -1201,7 +1161,6 @@ mod tests {
                 q
             })
             .collect();
-        let incidence = Incidence::of(&body.state.elements.elements, None, x.len()).unwrap();
         let mut loaded = 0;
         for cell in 0..er.cells.len() / SIMPLEX_ARITY {
             let ids = &er.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
@@ -1223,8 +1182,8 @@ mod tests {
                         block += blocks[m + 1];
                     }
                 }
-                let (d, g) = cell_geometry(&incidence, cell, &cell_positions(er, cell, &x[..]));
-                let (f2, block2) = repulsion_terms(er, &incidence, cell, a, (d, &g));
+                let (d, g) = cell_geometry(er, cell, &cell_positions(er, cell, &x[..]));
+                let (f2, block2) = repulsion_terms(er, cell, a, (d, &g));
                 let scale = f.length().max(1e-3);
                 assert!(
                     (f - f2).length() < 1e-3 * scale,

@@ -502,7 +502,7 @@ impl Solve<'_> {
         if let Some(er) = vertex.er {
             cells = &er.cells;
             for cell in 0..er.cells.len() / SIMPLEX_ARITY {
-                let (d, g) = cell_geometry(vertex.incidence, cell, &cell_positions(er, cell, x));
+                let (d, g) = cell_geometry(er, cell, &cell_positions(er, cell, x));
                 for (b, gb) in g.iter().enumerate() {
                     let g2 = gb.length_squared();
                     if g2 <= Real::MIN_POSITIVE {
@@ -603,13 +603,12 @@ impl Solve<'_> {
         let Some(er) = vertex.er else {
             return true;
         };
-        let incidence = vertex.incidence;
         (0..er.cells.len() / SIMPLEX_ARITY).all(|c| {
             let (from, to) = (cell_positions(er, c, from), cell_positions(er, c, to));
-            if cell_upright(er, incidence, c, &from) {
-                cell_upright(er, incidence, c, &to)
+            if cell_upright(er, c, &from) {
+                cell_upright(er, c, &to)
             } else {
-                height_ratio(er, incidence, c, &to) >= height_ratio(er, incidence, c, &from)
+                height_ratio(er, c, &to) >= height_ratio(er, c, &from)
             }
         })
     }
