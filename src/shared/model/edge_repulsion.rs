@@ -402,17 +402,7 @@ mod tests {
         let Elements::EdgeRepulsion(er) = &body.state.elements.elements else {
             unreachable!()
         };
-        let x: Vec<Vector> = body
-            .state
-            .positions
-            .iter()
-            .map(|p| {
-                let mut q = *p;
-                q[1] *= 0.6;
-                q[0] += 3.0 * p[1];
-                q
-            })
-            .collect();
+        let x = super::super::squashed(&body.state.positions, 0.6, 3.0);
         let v: Vec<Vector> = x.iter().map(|p| -*p * 2.0).collect();
         let n = x.len();
         let mut acc = Accumulator::new(n);

@@ -1150,17 +1150,7 @@ mod tests {
         let Elements::EdgeRepulsion(er) = &body.state.elements.elements else {
             unreachable!()
         };
-        let x: Vec<Vector> = body
-            .state
-            .positions
-            .iter()
-            .map(|p| {
-                let mut q = *p;
-                q[1] *= 0.6;
-                q[0] += 0.3 * p[1];
-                q
-            })
-            .collect();
+        let x = super::super::squashed(&body.state.positions, 0.6, 0.3);
         let mut loaded = 0;
         for cell in 0..er.cells.len() / SIMPLEX_ARITY {
             let ids = &er.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];

@@ -402,6 +402,20 @@ impl ModelState {
     }
 }
 
+/// `x` squashed to `height` of its height and sheared by `shear` along the first axis (test
+/// states that load the barriers and put the feet off-centre).
+#[cfg(test)]
+pub(crate) fn squashed(x: &[Vector], height: Real, shear: Real) -> Vec<Vector> {
+    x.iter()
+        .map(|p| {
+            let mut q = *p;
+            q[1] *= height;
+            q[0] += shear * p[1];
+            q
+        })
+        .collect()
+}
+
 /// Elastic (stored) energy of `elements` and the volumetric term at `x`, summed by
 /// [`threads::chunked_sum`] (on rayon's threads for a large body, the same bits whatever the
 /// thread count).

@@ -713,17 +713,7 @@ mod tests {
                 .model(model)
                 .build()
                 .unwrap();
-            let x0: Vec<Vector> = body
-                .state
-                .positions
-                .iter()
-                .map(|p| {
-                    let mut q = *p;
-                    q[1] *= 0.8;
-                    q[0] += 0.2 * p[1];
-                    q
-                })
-                .collect();
+            let x0 = super::super::super::squashed(&body.state.positions, 0.8, 0.2);
             let n = x0.len();
             let v0 = vec![Vector::ZERO; n];
             let held: Vec<Hold> = (0..n)
