@@ -48,6 +48,10 @@ pub(crate) struct AfterContacts<'a> {
     /// Per node, the point (at the collider's pose at the end of the substep) and normal of
     /// the collider surface that stopped it (it may lift off along the normal).
     pub lift: &'a [Option<(Vector, Vector)>],
+    /// Per node, its share of the dynamic bodies its contacts met that are lighter than the
+    /// deformable (zero for none): it carries them ([`Hold::Carries`]) instead of being held
+    /// where they go.
+    pub carried: &'a [Real],
 }
 
 /// One way of advancing a body's velocities over a substep.
@@ -382,6 +386,7 @@ pub(crate) struct Together<'a> {
     /// The velocities before the collider contacts, and where those left each node.
     pub before: Vec<Vector>,
     pub lift: Vec<Option<(Vector, Vector)>>,
+    pub carried: Vec<Real>,
     /// Out: the force each held node's hold exerted on it over the step.
     pub reactions: Vec<Vector>,
 }
@@ -418,6 +423,7 @@ impl Integrator {
                 let at = AfterContacts {
                     before: &m.before,
                     lift: &m.lift,
+                    carried: &m.carried,
                 };
                 held_nodes(m.body, h, Some(at))
             })
@@ -568,6 +574,10 @@ fn held_nodes(body: &Deformable, h: Real, after: Option<AfterContacts<'_>>) -> V
                 return Hold::At(at);
             }
             match after {
+                Some(a) if v[i] != a.before[i] && a.carried[i] > 0.0 => Hold::Carries {
+                    target: at,
+                    mass: a.carried[i],
+                },
                 Some(a) if v[i] != a.before[i] => match a.lift[i] {
                     Some((point, normal)) => {
                         // If it lifts off, the lowest it may end: where the contact set it less

@@ -122,8 +122,15 @@ impl Contact {
         self.anchor
     }
 
+    /// The deformable side's nodes that move (a bone's node does not), with their weights.
+    pub fn moving_nodes(&self) -> impl Iterator<Item = (usize, Real)> + '_ {
+        (0..FACET_ARITY)
+            .filter(|&a| self.inv_masses[a] > 0.0 && self.weights[a] > 0.0)
+            .map(|a| (self.nodes[a] as usize, self.weights[a]))
+    }
+
     /// The deformable side's velocity at the contact.
-    pub(super) fn velocity(&self, velocities: &[Vector]) -> Vector {
+    pub(crate) fn velocity(&self, velocities: &[Vector]) -> Vector {
         (0..FACET_ARITY)
             .map(|a| velocities[self.nodes[a] as usize] * self.weights[a])
             .sum()

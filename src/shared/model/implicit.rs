@@ -239,6 +239,14 @@ pub(crate) enum Hold {
         normal: Vector,
         target: Vector,
     },
+    /// A node a dynamic body lighter than the deformable stopped (or threw back) to `target`,
+    /// where the body goes: free, but carrying `mass`, its share of the body's effective mass,
+    /// drawn there with it. Held there, as for a body that does not yield, the node's cells
+    /// pushed the body as if it could hold them (a 0.08 kg box landing on a slab of 1 kg nodes
+    /// was launched at 28 m/s). What the carried mass exerts on the node is its reaction,
+    /// passed on to the body. A heavier body holds its nodes ([`Hold::Contact`]): a 1000 kg
+    /// box carried by a 1 kg cube's nodes turned its cells inside out.
+    Carries { target: Vector, mass: Real },
     /// A node a collider stopped (or threw back) to `target`: held there
     /// ([`Hold::At`]) unless that leaves one of its cells too flat to start from, then lifted
     /// off the collider's plane through `low` along `normal` ([`Hold::Above`]).
@@ -258,6 +266,16 @@ impl Hold {
             | Hold::Pressed(at)
             | Hold::Above { target: at, .. }
             | Hold::Contact { target: at, .. } => Some(at),
+            // Its own inertia draws it where it would go, the body's to `target`.
+            Hold::Carries { .. } => None,
+        }
+    }
+
+    /// The mass a node carries beside its own ([`Hold::Carries`]).
+    fn carried(self) -> Real {
+        match self {
+            Hold::Carries { mass, .. } => mass,
+            _ => 0.0,
         }
     }
 
@@ -292,7 +310,10 @@ impl Hold {
     fn start(self, free: Vector, x0: Vector) -> Vector {
         match self {
             Hold::Free => free,
-            Hold::At(at) | Hold::Pressed(at) | Hold::Contact { target: at, .. } => at,
+            Hold::At(at)
+            | Hold::Pressed(at)
+            | Hold::Carries { target: at, .. }
+            | Hold::Contact { target: at, .. } => at,
             Hold::Above { .. } => self.project(x0),
         }
     }
@@ -406,9 +427,15 @@ impl ModelState {
         let (x0, v0, h) = (input.x0, input.v0, input.h);
         let y: Vec<Vector> = (0..n)
             .map(|i| {
-                input.held[i]
-                    .at()
-                    .unwrap_or(x0[i] + v0[i] * h + input.gravity * (h * h))
+                let own = x0[i] + v0[i] * h + input.gravity * (h * h);
+                match input.held[i] {
+                    // The node and the mass it carries, each drawn to its own prediction.
+                    Hold::Carries { target, mass } => {
+                        let m = input.masses[i];
+                        (own * m + target * mass) / (m + mass)
+                    }
+                    hold => hold.at().unwrap_or(own),
+                }
             })
             .collect();
         let mut held: Vec<Hold> = input.held.iter().map(|h| h.held()).collect();
@@ -610,7 +637,7 @@ impl Solve<'_> {
         if matches!(hold, Hold::At(_)) {
             return None;
         }
-        let inertia = self.masses[i] / (self.h * self.h);
+        let inertia = (self.masses[i] + hold.carried()) / (self.h * self.h);
         let (mut f, mut block) = self.vertex.newton(i, x, inertia, self.y[i]);
         extra(&mut f, &mut block);
         let inverse = invert(block)?;
@@ -770,6 +797,12 @@ impl Start<'_> {
                     any = true;
                     for &i in &cells[c * arity..(c + 1) * arity] {
                         let i = i as usize;
+                        // A node that carries a body's share starts where it started the step.
+                        if matches!(self.given[i], Hold::Carries { .. }) && x[i] != self.x0[i] {
+                            x[i] = self.x0[i];
+                            lifted = true;
+                            continue;
+                        }
                         if matches!(self.given[i], Hold::Contact { .. })
                             && !matches!(held[i], Hold::Above { .. })
                         {

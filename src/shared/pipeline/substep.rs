@@ -6,9 +6,9 @@ use super::super::body::Deformable;
 use super::super::contact::soft::{self, NearFacets};
 use super::super::contact::soft_terms;
 use super::super::contact::{self, Contact, FacetMotion, FreeNode};
-use super::super::coupling::{BodyMotion, Substep};
+use super::super::coupling::{self, BodyMotion, Substep};
 use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
-use super::super::math::{Real, Vector, FACET_ARITY};
+use super::super::math::{self, AngVector, Real, Vector, FACET_ARITY};
 use super::super::mesh::Mesh;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::set::DeformableHandle;
@@ -239,15 +239,15 @@ fn step_together(
     }
     let mut terms = soft_terms::Terms::default();
     contact_terms(members, at, &mut terms.terms);
-    let lifts: Vec<_> = members
+    let lifts: Vec<(Vec<_>, Carried)> = members
         .iter()
         .zip(&before)
-        .map(|(m, b)| {
-            if b.is_empty() {
-                Vec::new()
-            } else {
-                lifts(&m.sc.touch, b.len())
-            }
+        .zip(motions)
+        .map(|((m, b), motions)| {
+            let at = substep_at(ctx, m.sc.broad.skin, at.h, at.t, motions);
+            let rows: &[Contact] = if b.is_empty() { &[] } else { &m.rigid_rows };
+            let carried = Carried::of(rows, m.body, &m.candidates, &at, bodies);
+            (lifts(&m.sc.touch, b.len()), carried)
         })
         .collect();
     // The velocities the collider contacts set, for the live members' answers after the solve.
@@ -264,8 +264,8 @@ fn step_together(
     let mut together: Vec<Together<'_>> = members
         .iter_mut()
         .zip(before)
-        .zip(lifts)
-        .map(|((m, before), lift)| Together {
+        .zip(lifts.iter())
+        .map(|((m, before), (lift, carried))| Together {
             g: ctx.gravity * m.body.gravity_scale,
             live: m.live,
             before: if m.live {
@@ -274,9 +274,14 @@ fn step_together(
                 m.body.state.velocities.clone()
             },
             lift: if m.live {
-                lift
+                lift.clone()
             } else {
                 vec![None; m.body.num_nodes()]
+            },
+            carried: if m.live {
+                carried.carried.clone()
+            } else {
+                vec![0.0; m.body.num_nodes()]
             },
             body: &mut *m.body,
             reactions: Vec::new(),
@@ -290,7 +295,8 @@ fn step_together(
     if !solved {
         return;
     }
-    for (i, ((before, reactions), set)) in reactions.into_iter().zip(sets).enumerate() {
+    let answers = reactions.into_iter().zip(sets).zip(&lifts);
+    for (i, (((before, reactions), set), (_, carried))) in answers.enumerate() {
         let m = &mut members[i];
         if !m.live {
             continue;
@@ -299,6 +305,7 @@ fn step_together(
             before: &before,
             set: &set,
             reactions: &reactions,
+            carried,
         };
         let own = substep_at(ctx, m.sc.broad.skin, at.h, at.t, &motions[i]);
         answered(m, &own, bodies, given);
@@ -635,9 +642,11 @@ fn advance(
     // An implicit integrator lets the rest of the body answer the contacts within the
     // step, then the contacts see the result.
     let lift = lifts(&sc.touch, before.len());
+    let carried = Carried::of(rows, body, candidates, at, bodies);
     let after = AfterContacts {
         before: &before,
         lift: &lift,
+        carried: &carried.carried,
     };
     let set = body.state.velocities.clone();
     let mut reactions = Vec::new();
@@ -646,6 +655,7 @@ fn advance(
             before: &before,
             set: &set,
             reactions: &reactions,
+            carried: &carried,
         };
         answered(m, at, bodies, given);
     }
@@ -663,6 +673,65 @@ fn lifts(touch: &Touch, nodes: usize) -> Vec<Option<(Vector, Vector)>> {
     lift
 }
 
+/// How the contacts with dynamic bodies share them among their nodes under the implicit step:
+/// each body's effective mass along a contact's normal, shared evenly among the body's
+/// contacts (as its block solve shares it, §6.8), and among a contact's nodes by their
+/// weights. A node whose bodies are each lighter than the whole deformable carries its share
+/// ([`AfterContacts::carried`]); one that meets a heavier body is held where it goes (a
+/// 1000 kg box on a 1 kg cube).
+struct Carried {
+    /// Per contact (row), its share of its body.
+    rows: Vec<Real>,
+    /// Per node, the sum of its shares.
+    nodes: Vec<Real>,
+    /// Per node, the sum of its shares if it carries them, else zero.
+    carried: Vec<Real>,
+}
+
+impl Carried {
+    fn of(
+        rows: &[Contact],
+        body: &Deformable,
+        candidates: &Candidates<'_>,
+        at: &Substep<'_>,
+        bodies: &RigidBodySet,
+    ) -> Self {
+        let mut count = vec![0usize; candidates.len()];
+        for r in rows {
+            count[r.candidate] += 1;
+        }
+        let mass: Real = body.rest.masses.iter().sum();
+        let n = body.num_nodes();
+        let (mut shares, mut nodes, mut carried) = (Vec::new(), vec![0.0; n], vec![0.0; n]);
+        let mut held = vec![false; n];
+        for r in rows {
+            let cand = &candidates[r.candidate];
+            let w = cand.inv_mass_at(r.anchor(), r.normal, at.motions, bodies);
+            let share = if w > 0.0 && cand.dynamic {
+                1.0 / (w * count[r.candidate] as Real)
+            } else {
+                0.0
+            };
+            shares.push(share);
+            for (i, weight) in r.moving_nodes() {
+                nodes[i] += share * weight;
+                carried[i] += share * weight;
+                held[i] |= w * mass < 1.0;
+            }
+        }
+        for (c, held) in carried.iter_mut().zip(held) {
+            if held {
+                *c = 0.0;
+            }
+        }
+        Carried {
+            rows: shares,
+            nodes,
+            carried,
+        }
+    }
+}
+
 /// After the integrator answered the collider contacts: the dynamic bodies get the rest of
 /// the held nodes' reactions ([`Given::pass_on`]) and the contacts see the result.
 fn answered(m: &mut Member<'_, '_>, at: &Substep<'_>, bodies: &mut RigidBodySet, given: Given<'_>) {
@@ -672,7 +741,7 @@ fn answered(m: &mut Member<'_, '_>, at: &Substep<'_>, bodies: &mut RigidBodySet,
     if candidates.is_empty() {
         return;
     }
-    given.pass_on(body, at, &sc.touch, candidates, bodies);
+    given.pass_on(body, at, (candidates, &m.rigid_rows), bodies);
     let sharing = Sharing {
         split: !m.shares_bodies,
         defer: false,
@@ -694,40 +763,101 @@ struct Given<'a> {
     set: &'a [Vector],
     /// The force each hold exerted on its node over the substep.
     reactions: &'a [Vector],
+    /// What the contacts with dynamic bodies gave their nodes to carry.
+    carried: &'a Carried,
 }
 
 impl Given<'_> {
-    /// Gives each dynamic body the rest of its contacts' reactions: the push a node held
-    /// against it took over the substep (`reactions · h` along the normal), less the impulse
-    /// the contact already gave that node. A node stopped by a collider under the implicit
-    /// step passes on the body's elastic force; its own velocity change is a fraction
-    /// `m/(k h²)` of it (a 1000 kg box sank through a soft cube it pressed on).
+    /// Gives each dynamic body the rest of its contacts' reactions: what the share of it that
+    /// a node carried exerted on the node over the substep (`reactions · h` along the normal),
+    /// less the impulse the contact already gave the node; a contact's part of a node's
+    /// reaction is its part of what the node carried. The solve is not converged: a body's
+    /// pushes are scaled down together until none sends the body away from its contact faster
+    /// than the deformable side goes there (each capped on its own, in turn, rocked a box
+    /// resting on four nodes; uncapped, a light box was launched).
     fn pass_on(
         &self,
         body: &Deformable,
         at: &Substep<'_>,
-        touch: &Touch,
-        candidates: &Candidates<'_>,
+        (candidates, rows): (&Candidates<'_>, &[Contact]),
         bodies: &mut RigidBodySet,
     ) {
         if self.reactions.is_empty() {
             return;
         }
-        for c in touch.last_contact.iter().flatten() {
-            let Some(i) = c.node.map(|i| i as usize) else {
+        let v = &body.state.velocities;
+        // Per push: its row, its body, its impulse along the normal, how fast it closes.
+        let mut pushes: Vec<(usize, RigidBodyHandle, Real, Real)> = Vec::new();
+        for (k, (r, share)) in rows.iter().zip(&self.carried.rows).enumerate() {
+            let cand = &candidates[r.candidate];
+            let Some(handle) = cand.rigid(at.motions).filter(|_| *share > 0.0) else {
                 continue;
             };
-            let Some(cand) = candidates.iter().find(|k| k.handle == c.collider) else {
-                continue;
-            };
-            if !cand.dynamic {
+            let rest: Real = r
+                .moving_nodes()
+                .map(|(i, w)| {
+                    let part = share * w / self.carried.nodes[i];
+                    let given = (self.set[i] - self.before[i]) * body.rest.masses[i];
+                    part * r.normal.dot(self.reactions[i] * at.h - given)
+                })
+                .sum();
+            if rest > 0.0 {
+                let anchor = r.anchor();
+                let moving =
+                    cand.anchored_velocity(r.point, anchor, at.s1, at.dt, at.motions, bodies);
+                let closing = r.normal.dot(moving - r.velocity(v));
+                // A node held where the body goes moves with it: only carried pushes are capped.
+                let carries = r.moving_nodes().all(|(i, _)| self.carried.carried[i] > 0.0);
+                let closing = if carries {
+                    closing.max(0.0)
+                } else {
+                    Real::INFINITY
+                };
+                pushes.push((k, handle, rest, closing));
+            }
+        }
+        let mut done = vec![false; pushes.len()];
+        for p in 0..pushes.len() {
+            if done[p] {
                 continue;
             }
-            let given = (self.set[i] - self.before[i]) * body.rest.masses[i];
-            let rest = c.normal.dot(self.reactions[i] * at.h - given);
-            if rest > 0.0 {
-                let anchor = cand.anchor(c.point);
-                cand.apply_impulse(-c.normal * rest, anchor, at.motions, bodies, at.dt);
+            let handle = pushes[p].1;
+            let Some(rb) = bodies.get(handle) else {
+                continue;
+            };
+            let same: Vec<usize> = (p..pushes.len())
+                .filter(|&q| pushes[q].1 == handle)
+                .collect();
+            // The velocity change all of the body's pushes give it, and the largest share of
+            // them that separates no contact faster than its deformable side goes.
+            let com = rb.center_of_mass();
+            let (mut dv, mut dw) = (Vector::ZERO, AngVector::default());
+            for &q in &same {
+                let (k, _, rest, _) = pushes[q];
+                let r = &rows[k];
+                let (a, b) = coupling::impulse_response(rb, r.anchor(), -r.normal * rest);
+                dv += a;
+                dw += b;
+            }
+            let scale: Real = same.iter().fold(1.0, |scale, &q| {
+                let (k, _, _, closing) = pushes[q];
+                let r = &rows[k];
+                let opening = -r.normal.dot(dv + math::ang_cross(dw, r.anchor() - com));
+                if opening > closing {
+                    scale.min(closing / opening)
+                } else {
+                    scale
+                }
+            });
+            for &q in &same {
+                done[q] = true;
+                let (k, _, rest, _) = pushes[q];
+                let r = &rows[k];
+                if scale * rest > 0.0 {
+                    let cand = &candidates[r.candidate];
+                    let impulse = -r.normal * (scale * rest);
+                    cand.apply_impulse(impulse, r.anchor(), at.motions, bodies, at.dt);
+                }
             }
         }
     }
