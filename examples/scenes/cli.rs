@@ -16,7 +16,8 @@ use sinew_scenes::record::Record;
 pub enum Scene {
     /// A soft cube dropped on the ground.
     Fall,
-    /// A 10 cm silicone ball (E = 1 MPa, 2 cm cells) dropped on the ground at 60 Hz.
+    /// A 10 cm silicone ball (E = 1 MPa, 2 cm cells) dropped on the ground at 60 Hz, under
+    /// the library's default integrator unless `--integrator` is given.
     Ball,
     /// A bar stretched 2 %: Poisson's ratio measured (`--poisson` asks for one).
     Stretch,
@@ -137,7 +138,8 @@ pub struct Args {
     /// Strikes of the manipulator (default 20).
     #[arg(long)]
     pub strikes: Option<usize>,
-    /// sinew's integrator (every scene but rotation-error, squeeze, fold and advise).
+    /// sinew's integrator (every scene but rotation-error, squeeze, fold and advise; default:
+    /// explicit, except ball).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
     /// Gauss–Seidel sweeps per step of the implicit integrator (default 10). (`--iterations`
@@ -852,7 +854,12 @@ macro_rules! dimension_runner {
                                 seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
-                                integrator: cube.integrator,
+                                // Without `--integrator`, the library's default.
+                                integrator: if args.integrator.is_some() {
+                                    cube.integrator
+                                } else {
+                                    d.integrator
+                                },
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]

@@ -5,8 +5,8 @@ use crate::dim::rapier::prelude::{
     BroadPhaseBvh, ColliderSet, IntegrationParameters, RigidBodySet,
 };
 use crate::dim::{
-    DeformableBuilder, DeformablePipeline, DeformableSet, DeformableWorld, ElementModel, Material,
-    Stiffness,
+    DeformableBuilder, DeformablePipeline, DeformableSet, DeformableWorld, ElementModel,
+    Integrator, Material, Stiffness,
 };
 
 fn jelly(young_modulus: f32) -> DeformableBuilder {
@@ -37,6 +37,7 @@ fn substeps_follow_the_stiffness() {
     let run = |e: f32| {
         let mut world = DeformableWorld::new();
         world.set_dt(1.0 / 60.0);
+        world.pipeline.settings.integrator = Integrator::Explicit;
         let h = world.insert(jelly(e).translation(UP * 3.0).build().unwrap());
         world.step();
         world.report().get(h).unwrap().substeps
@@ -70,6 +71,7 @@ fn a_blow_up_is_contained_and_reported() {
     wobble[0] += Vector::splat(0.05);
     set[bad].set_positions(&wobble).unwrap();
     let mut pipeline = DeformablePipeline::new();
+    pipeline.settings.integrator = Integrator::Explicit;
     pipeline.settings.fixed_substeps = Some(1);
     let params = IntegrationParameters {
         dt: 1.0 / 60.0,
@@ -108,6 +110,7 @@ fn a_box_pushed_by_a_blow_up_moves_as_if_never_touched() {
     use crate::dim::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
     let mut world = DeformableWorld::new();
     world.set_dt(1.0 / 60.0);
+    world.pipeline.settings.integrator = Integrator::Explicit;
     world.pipeline.settings.fixed_substeps = Some(1);
     let bad = world.insert(
         jelly(1e4)
@@ -191,6 +194,7 @@ fn energy_growth(model: ElementModel, factor: f32) -> f32 {
     set[h].set_velocities(&v).unwrap();
     let start = set[h].kinetic_energy();
     let mut pipeline = DeformablePipeline::new();
+    pipeline.settings.integrator = Integrator::Explicit;
     pipeline.settings.fixed_substeps = Some(1);
     pipeline.settings.time_until_sleep = f32::INFINITY;
     let params = IntegrationParameters {
