@@ -295,7 +295,7 @@ fn threads(c: &mut Criterion) {
             resolution: res,
             drop_height: 0.0,
             dt: if implicit.is_some() { 1.0 / 60.0 } else { 1e-3 },
-            integrator: implicit.unwrap_or_default(),
+            integrator: implicit.unwrap_or(Integrator::Explicit),
             ..FallScene::default()
         };
         for threads in [1, 2] {
