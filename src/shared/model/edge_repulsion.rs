@@ -221,6 +221,39 @@ impl EdgeRepulsion {
         limit
     }
 
+    /// Adds the repulsions (and volumetric terms) of cells `ids` into `force` and
+    /// `stiffness`, which start at node `first` and hold every node of those cells; returns
+    /// their crossing limiter.
+    #[cfg(feature = "parallel")]
+    pub(crate) fn add_cells(
+        &self,
+        ids: std::ops::Range<usize>,
+        first: usize,
+        (x, v, volume): (&[Vector], &[Vector], Option<&Volume>),
+        force: &mut [Vector],
+        stiffness: &mut [Real],
+    ) -> Real {
+        let mut limit = Real::INFINITY;
+        let (cells, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
+        let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
+        let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
+        let (cells, signs) = (&cells[ids.clone()], &self.sign[ids.clone()]);
+        let (h0, k) = (&h0[ids.clone()], &k[ids.clone()]);
+        let terms = cells.iter().zip(signs).zip(h0).zip(k);
+        for (c, (((nodes, sign), h0), k)) in terms.enumerate() {
+            let cell = ids.start + c;
+            let (f, k_row, cell_limit) =
+                cell_terms(nodes, sign, h0, k, x, v, volume.map(|v| (v, cell)));
+            for a in 0..SIMPLEX_ARITY {
+                let i = nodes[a] as usize - first;
+                force[i] += f[a];
+                stiffness[i] += k_row[a];
+            }
+            limit = limit.min(cell_limit);
+        }
+        limit
+    }
+
     /// Writes each cell's repulsion force and stiffness bound on each of its vertices into
     /// `force` and `stiffness` (one entry per slot), on rayon's threads; returns the crossing
     /// limiter.

@@ -240,6 +240,10 @@ pub(crate) struct ModelState {
     incidence: std::sync::OnceLock<Option<implicit::Incidence>>,
     #[cfg(feature = "parallel")]
     split: Option<parallel::Split>,
+    /// Edge repulsion's evaluation by slabs, which replaces the split where the node numbering
+    /// allows it, on any number of threads.
+    #[cfg(feature = "parallel")]
+    slabs: Option<parallel::Slabs>,
 }
 
 impl ModelState {
@@ -314,10 +318,19 @@ impl ModelState {
             .map(|(sigma, kappa)| {
                 volume::Volume::build(mesh.cell_indices(), mesh.nodes(), kappa * young / sigma)
             });
+        #[cfg(feature = "parallel")]
+        let split = parallel::Split::build_if_large(&elements, mesh);
+        #[cfg(feature = "parallel")]
+        let slabs = match (&split, &elements) {
+            (Some(_), Elements::EdgeRepulsion(er)) => parallel::Slabs::of(er, mesh.nodes().len()),
+            _ => None,
+        };
         Ok(ModelState {
             volume,
             #[cfg(feature = "parallel")]
-            split: parallel::Split::build_if_large(&elements, mesh),
+            split: split.filter(|_| slabs.is_none()),
+            #[cfg(feature = "parallel")]
+            slabs,
             elements,
             bounds,
             incidence: std::sync::OnceLock::new(),
@@ -338,6 +351,14 @@ impl ModelState {
     }
 
     fn accumulate_elements(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
+        #[cfg(feature = "parallel")]
+        if let (Some(slabs), Elements::EdgeRepulsion(er)) = (&self.slabs, &self.elements) {
+            assert!(v.len() == x.len() && acc.force.len() == x.len());
+            assert!(acc.stiffness.len() == x.len() && acc.damping.len() == x.len());
+            self.bounds.add_to(acc);
+            let state = (x, v, self.volume.as_ref());
+            return slabs.accumulate(er, state, &mut acc.force, &mut acc.stiffness);
+        }
         #[cfg(feature = "parallel")]
         if let Some(split) = &mut self.split {
             if rayon::current_num_threads() > 1 {

@@ -149,6 +149,35 @@ impl Springs {
         }
     }
 
+    /// Adds the forces of springs `ids` (and, for the nonlinear law, their stiffness rows)
+    /// into `force` and `stiffness`, which start at node `first` and hold every node of
+    /// those springs.
+    #[cfg(feature = "parallel")]
+    pub(crate) fn add_some(
+        &self,
+        ids: std::ops::Range<usize>,
+        first: usize,
+        (x, v): (&[Vector], &[Vector]),
+        force: &mut [Vector],
+        stiffness: &mut [Real],
+    ) {
+        let count = ids.len();
+        for (((&pair, &l0), &k), &c) in self.terms(ids.start).take(count) {
+            let (i, j) = (pair[0] as usize - first, pair[1] as usize - first);
+            if self.law == Law::Nonlinear {
+                let (f, k_row) = term::<true>(pair, l0, k, c, x, v);
+                force[i] += f;
+                force[j] -= f;
+                stiffness[i] += k_row;
+                stiffness[j] += k_row;
+            } else {
+                let (f, _) = term::<false>(pair, l0, k, c, x, v);
+                force[i] += f;
+                force[j] -= f;
+            }
+        }
+    }
+
     /// Writes each spring's force on its first node (the second takes `−f`) into `force` and,
     /// for the nonlinear law, its row bound on both into `stiffness` (ignored for the linear
     /// law), on rayon's threads.

@@ -3,7 +3,7 @@
 use super::super::body::DeformableBuilder;
 use super::super::math::{Real, Vector, DIM};
 use super::super::mesh::{CellKind, Mesh};
-use super::parallel::Split;
+use super::parallel::{self, Split};
 use super::{Accumulator, ElementModel, ModelState, RotationFit, ShapeDamping};
 
 /// Every model on simplices, the models that take them on cubes, and the shape-based element's
@@ -32,7 +32,15 @@ fn cases() -> Vec<(ElementModel, CellKind)> {
 /// A lattice with a few hundred nodes (enough for several rayon tasks), stretched by 10%,
 /// every node jittered by up to a fifth of the spacing and moving with a random velocity.
 fn deformed(model: ElementModel, kind: CellKind) -> (ModelState, Mesh, Vec<Vector>, Vec<Vector>) {
-    let res = if DIM == 2 { 20 } else { 7 };
+    deformed_at(model, kind, if DIM == 2 { 20 } else { 7 })
+}
+
+/// [`deformed`] with `res` nodes an edge.
+fn deformed_at(
+    model: ElementModel,
+    kind: CellKind,
+    res: usize,
+) -> (ModelState, Mesh, Vec<Vector>, Vec<Vector>) {
     let body = DeformableBuilder::cuboid(Vector::splat(0.5), [res; DIM])
         .cells(kind)
         .model(model)
@@ -154,14 +162,74 @@ fn parallel_forces_do_not_depend_on_the_thread_count() {
     }
 }
 
+/// Nodes an edge of a lattice large enough to split.
+const LARGE: usize = if DIM == 2 { 48 } else { 10 };
+
 #[test]
 fn small_models_stay_serial_and_large_ones_split() {
     let (small, ..) = deformed(ElementModel::EdgeRepulsion, CellKind::Simplex);
-    assert!(small.split.is_none());
-    let res = if DIM == 2 { 48 } else { 10 };
-    let large = DeformableBuilder::cuboid(Vector::splat(0.5), [res; DIM])
-        .model(ElementModel::EdgeRepulsion)
-        .build()
-        .expect("lattice builds");
-    assert!(large.state.elements.split.is_some());
+    assert!(small.split.is_none() && small.slabs.is_none());
+    let large = |model| {
+        DeformableBuilder::cuboid(Vector::splat(0.5), [LARGE; DIM])
+            .model(model)
+            .build()
+            .expect("lattice builds")
+            .state
+            .elements
+    };
+    let shape = large(ElementModel::SHAPE_MATCHING);
+    assert!(shape.split.is_some() && shape.slabs.is_none());
+    // Edge repulsion goes by slabs instead.
+    let er = large(ElementModel::EdgeRepulsion);
+    assert!(er.split.is_none() && er.slabs.is_some());
+}
+
+#[test]
+fn edge_repulsion_by_slabs_is_the_serial_loop_reordered_on_any_thread_count() {
+    // The slabs add each node's terms in another order than the serial loop (the terms across
+    // a boundary last): the same forces to rounding, and the same bits on any thread count.
+    let (mut state, _, x, v) = deformed_at(ElementModel::EdgeRepulsion, CellKind::Simplex, LARGE);
+    let slabs = parallel::Slabs::of(
+        match &state.elements {
+            super::Elements::EdgeRepulsion(er) => er,
+            _ => unreachable!(),
+        },
+        x.len(),
+    )
+    .expect("a large lattice goes by slabs");
+    state.split = None;
+    state.slabs = None;
+    let n = x.len();
+    let mut serial = Accumulator::new(n);
+    let serial_limit = state.accumulate_serial(&x, &v, &mut serial);
+    state.slabs = Some(slabs);
+    let by_slabs = |threads: usize| {
+        let mut acc = Accumulator::new(n);
+        let limit = pool(threads).install(|| state.clone().accumulate_elements(&x, &v, &mut acc));
+        (acc, limit)
+    };
+    let (one, limit) = by_slabs(1);
+    assert_eq!(limit, serial_limit);
+    let largest = serial.force.iter().map(|f| f.length()).fold(0.0, Real::max);
+    assert!(largest > 0.0);
+    for i in 0..n {
+        let df = (one.force[i] - serial.force[i]).length();
+        assert!(
+            df <= 1e-4 * largest,
+            "node {i}: force off by {df} of {largest}"
+        );
+        let dk = (one.stiffness[i] - serial.stiffness[i]).abs();
+        assert!(
+            dk <= 1e-4 * serial.stiffness[i],
+            "node {i}: stiffness off by {dk}"
+        );
+        assert_eq!(one.damping[i], serial.damping[i]);
+    }
+    for threads in [2, 3, 16] {
+        let (more, more_limit) = by_slabs(threads);
+        assert!(
+            bits(&one, limit) == bits(&more, more_limit),
+            "{threads} threads differ from one"
+        );
+    }
 }
