@@ -515,8 +515,9 @@ fn advise_picks_the_cheapest_candidate_inside_the_bounds() {
     let lines = advise(&[
         "--dim", "2", "--trial", "crush", "--res", "3", "--mass", "10",
     ]);
-    // Five models explicitly, four by each implicit integrator with 2 and with 10 sweeps.
-    assert_eq!(lines.len(), 21);
+    // Five models explicitly, four by each implicit integrator with 2 and with 10 sweeps, and
+    // four under the default (Auto).
+    assert_eq!(lines.len(), 25);
     let passing: Vec<&Value> = lines
         .iter()
         .filter(|l| l["advise"]["rejected"].is_null())

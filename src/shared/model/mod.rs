@@ -57,6 +57,8 @@ pub mod nonlinear_springs;
 #[cfg(feature = "parallel")]
 mod parallel;
 pub mod shape_matching;
+#[cfg(feature = "parallel")]
+mod slabs;
 mod slack;
 pub mod springs;
 #[cfg(all(test, feature = "parallel"))]
@@ -243,7 +245,7 @@ pub(crate) struct ModelState {
     /// Edge repulsion's evaluation by slabs, which replaces the split where the node numbering
     /// allows it, on any number of threads.
     #[cfg(feature = "parallel")]
-    slabs: Option<parallel::Slabs>,
+    slabs: Option<slabs::Slabs>,
 }
 
 impl ModelState {
@@ -322,7 +324,7 @@ impl ModelState {
         let split = parallel::Split::build_if_large(&elements, mesh);
         #[cfg(feature = "parallel")]
         let slabs = match (&split, &elements) {
-            (Some(_), Elements::EdgeRepulsion(er)) => parallel::Slabs::of(er, mesh.nodes().len()),
+            (Some(_), Elements::EdgeRepulsion(er)) => slabs::Slabs::of(er, mesh.nodes().len()),
             _ => None,
         };
         Ok(ModelState {

@@ -3,7 +3,8 @@
 use super::super::body::DeformableBuilder;
 use super::super::math::{Real, Vector, DIM};
 use super::super::mesh::{CellKind, Mesh};
-use super::parallel::{self, Split};
+use super::parallel::Split;
+use super::slabs::Slabs;
 use super::{Accumulator, ElementModel, ModelState, RotationFit, ShapeDamping};
 
 /// Every model on simplices, the models that take them on cubes, and the shape-based element's
@@ -189,7 +190,7 @@ fn edge_repulsion_by_slabs_is_the_serial_loop_reordered_on_any_thread_count() {
     // The slabs add each node's terms in another order than the serial loop (the terms across
     // a boundary last): the same forces to rounding, and the same bits on any thread count.
     let (mut state, _, x, v) = deformed_at(ElementModel::EdgeRepulsion, CellKind::Simplex, LARGE);
-    let slabs = parallel::Slabs::of(
+    let slabs = Slabs::of(
         match &state.elements {
             super::Elements::EdgeRepulsion(er) => er,
             _ => unreachable!(),

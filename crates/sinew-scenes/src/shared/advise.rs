@@ -190,21 +190,27 @@ impl Trial {
     }
 }
 
-/// The models and integrators tried: every model explicitly, and every model the implicit
-/// steps take by each of them (backward Euler and midpoint) with 2 and with 10 sweeps.
+/// The models and integrators tried: every model explicitly, every model the implicit steps
+/// take by each of them (backward Euler and midpoint) with 2 and with 10 sweeps, and those
+/// models under the default, `Integrator::Auto { iterations: 2 }` (the explicit step or the
+/// midpoint step, whichever it takes at the trial's `dt`).
 pub fn candidates() -> Vec<(ElementModel, Integrator)> {
+    let implicit = || {
+        ElementModel::ALL
+            .into_iter()
+            .filter(|&m| m != ElementModel::CentroidSprings)
+    };
     let mut out: Vec<_> = ElementModel::ALL
         .iter()
         .map(|&m| (m, Integrator::Explicit))
         .collect();
     for iterations in [2, 10] {
-        for m in ElementModel::ALL {
-            if m != ElementModel::CentroidSprings {
-                out.push((m, Integrator::Implicit { iterations }));
-                out.push((m, Integrator::Midpoint { iterations }));
-            }
+        for m in implicit() {
+            out.push((m, Integrator::Implicit { iterations }));
+            out.push((m, Integrator::Midpoint { iterations }));
         }
     }
+    out.extend(implicit().map(|m| (m, Integrator::default())));
     out
 }
 
@@ -363,11 +369,13 @@ mod tests {
     fn every_model_is_tried_explicitly_and_all_but_centroid_springs_implicitly() {
         let c = candidates();
         // Every model explicitly; all but centroid springs by both implicit integrators, with
-        // 2 and with 10 sweeps.
-        assert_eq!(c.len(), ElementModel::ALL.len() * 5 - 4);
+        // 2 and with 10 sweeps, and under the default (centroid springs' default is the
+        // explicit step).
+        assert_eq!(c.len(), ElementModel::ALL.len() * 6 - 5);
         for m in ElementModel::ALL {
             assert!(c.contains(&(m, Integrator::Explicit)));
             let implicit = m != ElementModel::CentroidSprings;
+            assert_eq!(c.contains(&(m, Integrator::default())), implicit);
             for iterations in [2, 10] {
                 assert_eq!(
                     c.contains(&(m, Integrator::Implicit { iterations })),
