@@ -221,9 +221,9 @@ impl EdgeRepulsion {
         limit
     }
 
-    /// Adds the repulsions (and volumetric terms) of cells `ids` into `force` and
-    /// `stiffness`, which start at node `first` and hold every node of those cells; returns
-    /// their crossing limiter.
+    /// Adds the repulsions (and volumetric terms) of cells `ids` on the nodes `force` and
+    /// `stiffness` hold, nodes `first..first + force.len()`, as [`EdgeRepulsion::accumulate`]
+    /// adds them; returns the cells' crossing limiter.
     #[cfg(feature = "parallel")]
     pub(crate) fn add_cells(
         &self,
@@ -234,20 +234,23 @@ impl EdgeRepulsion {
         stiffness: &mut [Real],
     ) -> Real {
         let mut limit = Real::INFINITY;
+        let nodes = force.len();
         let (cells, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
         let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
         let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
         let (cells, signs) = (&cells[ids.clone()], &self.sign[ids.clone()]);
         let (h0, k) = (&h0[ids.clone()], &k[ids.clone()]);
         let terms = cells.iter().zip(signs).zip(h0).zip(k);
-        for (c, (((nodes, sign), h0), k)) in terms.enumerate() {
+        for (c, (((ids_c, sign), h0), k)) in terms.enumerate() {
             let cell = ids.start + c;
             let (f, k_row, cell_limit) =
-                cell_terms(nodes, sign, h0, k, x, v, volume.map(|v| (v, cell)));
+                cell_terms(ids_c, sign, h0, k, x, v, volume.map(|v| (v, cell)));
             for a in 0..SIMPLEX_ARITY {
-                let i = nodes[a] as usize - first;
-                force[i] += f[a];
-                stiffness[i] += k_row[a];
+                let i = (ids_c[a] as usize).wrapping_sub(first);
+                if i < nodes {
+                    force[i] += f[a];
+                    stiffness[i] += k_row[a];
+                }
             }
             limit = limit.min(cell_limit);
         }

@@ -149,9 +149,9 @@ impl Springs {
         }
     }
 
-    /// Adds the forces of springs `ids` (and, for the nonlinear law, their stiffness rows)
-    /// into `force` and `stiffness`, which start at node `first` and hold every node of
-    /// those springs.
+    /// Adds the forces of springs `ids` (and, for the nonlinear law, their stiffness rows) on
+    /// the nodes `force` and `stiffness` hold, nodes `first..first + force.len()`, as
+    /// [`Springs::accumulate`] adds them.
     #[cfg(feature = "parallel")]
     pub(crate) fn add_some(
         &self,
@@ -162,18 +162,25 @@ impl Springs {
         stiffness: &mut [Real],
     ) {
         let count = ids.len();
+        let nodes = force.len();
         for (((&pair, &l0), &k), &c) in self.terms(ids.start).take(count) {
-            let (i, j) = (pair[0] as usize - first, pair[1] as usize - first);
-            if self.law == Law::Nonlinear {
-                let (f, k_row) = term::<true>(pair, l0, k, c, x, v);
+            let (f, k_row) = match self.law {
+                Law::Linear => term::<false>(pair, l0, k, c, x, v),
+                Law::Nonlinear => term::<true>(pair, l0, k, c, x, v),
+            };
+            let i = (pair[0] as usize).wrapping_sub(first);
+            if i < nodes {
                 force[i] += f;
+                if self.law == Law::Nonlinear {
+                    stiffness[i] += k_row;
+                }
+            }
+            let j = (pair[1] as usize).wrapping_sub(first);
+            if j < nodes {
                 force[j] -= f;
-                stiffness[i] += k_row;
-                stiffness[j] += k_row;
-            } else {
-                let (f, _) = term::<false>(pair, l0, k, c, x, v);
-                force[i] += f;
-                force[j] -= f;
+                if self.law == Law::Nonlinear {
+                    stiffness[j] += k_row;
+                }
             }
         }
     }

@@ -4,7 +4,6 @@ use super::super::body::DeformableBuilder;
 use super::super::math::{Real, Vector, DIM};
 use super::super::mesh::{CellKind, Mesh};
 use super::parallel::Split;
-use super::slabs::Slabs;
 use super::{Accumulator, ElementModel, ModelState, RotationFit, ShapeDamping};
 
 /// Every model on simplices, the models that take them on cubes, and the shape-based element's
@@ -186,51 +185,23 @@ fn small_models_stay_serial_and_large_ones_split() {
 }
 
 #[test]
-fn edge_repulsion_by_slabs_is_the_serial_loop_reordered_on_any_thread_count() {
-    // The slabs add each node's terms in another order than the serial loop (the terms across
-    // a boundary last): the same forces to rounding, and the same bits on any thread count.
+fn edge_repulsion_by_slabs_equals_the_serial_loop_bit_for_bit() {
+    // Each slab evaluates every term that touches it and keeps its own nodes' parts: on any
+    // thread count every node sums the serial loop's terms in the serial loop's order.
     let (mut state, _, x, v) = deformed_at(ElementModel::EdgeRepulsion, CellKind::Simplex, LARGE);
-    let slabs = Slabs::of(
-        match &state.elements {
-            super::Elements::EdgeRepulsion(er) => er,
-            _ => unreachable!(),
-        },
-        x.len(),
-    )
-    .expect("a large lattice goes by slabs");
-    state.split = None;
-    state.slabs = None;
     let n = x.len();
     let mut serial = Accumulator::new(n);
     let serial_limit = state.accumulate_serial(&x, &v, &mut serial);
-    state.slabs = Some(slabs);
-    let by_slabs = |threads: usize| {
-        let mut acc = Accumulator::new(n);
-        let limit = pool(threads).install(|| state.clone().accumulate_elements(&x, &v, &mut acc));
-        (acc, limit)
-    };
-    let (one, limit) = by_slabs(1);
-    assert_eq!(limit, serial_limit);
-    let largest = serial.force.iter().map(|f| f.length()).fold(0.0, Real::max);
-    assert!(largest > 0.0);
-    for i in 0..n {
-        let df = (one.force[i] - serial.force[i]).length();
-        assert!(
-            df <= 1e-4 * largest,
-            "node {i}: force off by {df} of {largest}"
-        );
-        let dk = (one.stiffness[i] - serial.stiffness[i]).abs();
-        assert!(
-            dk <= 1e-4 * serial.stiffness[i],
-            "node {i}: stiffness off by {dk}"
-        );
-        assert_eq!(one.damping[i], serial.damping[i]);
-    }
+    assert!(serial.force.iter().any(|f| f.length() > 0.0));
     for threads in [2, 3, 16] {
-        let (more, more_limit) = by_slabs(threads);
+        let mut acc = Accumulator::new(n);
+        let limit = pool(threads).install(|| state.accumulate_elements(&x, &v, &mut acc));
+        let slabs = state.slabs.as_ref().expect("a large lattice goes by slabs");
+        assert!(slabs.count() >= 2 && slabs.count() <= threads);
         assert!(
-            bits(&one, limit) == bits(&more, more_limit),
-            "{threads} threads differ from one"
+            bits(&serial, serial_limit) == bits(&acc, limit),
+            "{threads} threads ({} slabs) differ from the serial loop",
+            slabs.count()
         );
     }
 }
