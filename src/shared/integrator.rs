@@ -213,7 +213,8 @@ pub enum Integrator {
         /// Sweeps per step.
         iterations: usize,
     },
-    /// Per body: the explicit step where it is cheap, [`Integrator::Midpoint`] where the
+    /// The default, with 2 sweeps ([`Integrator::default`]). Per body: the explicit step where
+    /// it is cheap, [`Integrator::Midpoint`] where the
     /// explicit step would take more than [`AUTO_SUBSTEPS`] substeps a step at rest (a stiff
     /// or finely meshed body at a game's frame rate). The choice follows the body's calibrated
     /// stable substep at rest and the step length, so it changes only with `dt`; the report
