@@ -254,9 +254,14 @@ impl Integrator {
     }
 
     /// Whether `body` takes the implicit step with its contacts with other bodies as terms
-    /// ([`Integrate::solve_together`]).
+    /// ([`Integrate::solve_together`]). Not under [`Integrator::Auto`], whose islands of bodies
+    /// that may touch step explicitly: solved together with its 2 sweeps, a 3D tower of six
+    /// shape-matched cubes at 60 Hz sank 2.7 mm into itself, gained 0.8 % of its energy and
+    /// slid 13 cm apart in 6 s (10 sweeps hold it).
     pub(crate) fn steps_together(&self, body: &Deformable) -> bool {
-        self.steps_implicitly(body) && body.state.elements.has_convex_implicit()
+        !matches!(self, Integrator::Auto { .. })
+            && self.steps_implicitly(body)
+            && body.state.elements.has_convex_implicit()
     }
 
     /// Whether `body` takes the implicit step, and its sweeps.

@@ -90,6 +90,27 @@ fn the_tower_stands_under_the_implicit_step_solved_together() {
 }
 
 #[test]
+fn a_shape_matched_tower_of_six_stands_under_the_default_settings() {
+    // `Integrator::Auto` (the default) steps an island of bodies that may touch explicitly:
+    // solved together with its 2 sweeps, this 3D tower at 60 Hz sank 2.7 mm into itself,
+    // gained 0.8 % of its energy and slid 13 cm apart in 6 s.
+    let scene = TowerScene {
+        bodies: 6,
+        seconds: 6.0,
+        integrator: Integrator::default(),
+        ..tower(ElementModel::SHAPE_MATCHING)
+    };
+    let r = scene.run().unwrap();
+    assert!(!r.failed, "{:?}", r.failure);
+    let over = r.energy_over_start.unwrap();
+    assert!(over <= 1e-3, "energy rose {over} above its start");
+    let scatter = r.scatter.unwrap();
+    assert!(scatter <= 0.05, "a cube ended {scatter} m off the axis");
+    let inside = r.rest_interpenetration.unwrap() as Real;
+    assert!(inside < 0.01 * scene.size, "{inside} m inside at rest");
+}
+
+#[test]
 fn an_edge_repulsion_tower_steps_explicitly_under_the_implicit_setting() {
     let run = |integrator| {
         TowerScene {
