@@ -16,8 +16,7 @@ use sinew_scenes::record::Record;
 pub enum Scene {
     /// A soft cube dropped on the ground.
     Fall,
-    /// A 10 cm silicone ball (E = 1 MPa, 2 cm cells) dropped on the ground at 60 Hz, under
-    /// the library's default integrator unless `--integrator` is given.
+    /// A 10 cm silicone ball (E = 1 MPa, 2 cm cells) dropped on the ground at 60 Hz.
     Ball,
     /// A bar stretched 2 %: Poisson's ratio measured (`--poisson` asks for one).
     Stretch,
@@ -139,7 +138,7 @@ pub struct Args {
     #[arg(long)]
     pub strikes: Option<usize>,
     /// sinew's integrator (every scene but rotation-error, squeeze, fold and advise; default:
-    /// explicit, except ball).
+    /// explicit).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
     /// Gauss–Seidel sweeps per step of the implicit integrator (default 10). (`--iterations`
@@ -854,12 +853,7 @@ macro_rules! dimension_runner {
                                 seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
-                                // Without `--integrator`, the library's default.
-                                integrator: if args.integrator.is_some() {
-                                    cube.integrator
-                                } else {
-                                    d.integrator
-                                },
+                                integrator: cube.integrator,
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]

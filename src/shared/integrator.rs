@@ -142,15 +142,16 @@ impl Integrate for SymplecticEuler {
 
 /// Which integrator steps the deformables ([`PipelineSettings::integrator`](super::PipelineSettings::integrator)).
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Default)]
 pub enum Integrator {
-    /// Symplectic Euler in substeps under the stability bound, the papers' integrator.
-    /// Undamped free motion keeps its energy: the reported energy oscillates about
+    /// Symplectic Euler in substeps under the stability bound, the papers' integrator (the
+    /// default). Undamped free motion keeps its energy: the reported energy oscillates about
     /// a constant by O(h·ω) (5–14 % for a 5 % free vibration at the automatic substep of a
     /// 60 Hz step, 1 % at h = 1/600 s), with no trend beyond 0.05 % in 10 s at h = 1/600 s
     /// for any model (`tests/shared/energy.rs`). At the automatic substep nonlinear
     /// springs, which stiffen as they shorten, can gain: +3.7 % in 10 s for that vibration;
     /// lower [`PipelineSettings::safety`](super::PipelineSettings::safety) there.
+    #[default]
     Explicit,
     /// Backward Euler by Vertex Block Descent: one substep per step, `iterations` Gauss–Seidel
     /// sweeps of per-node Newton steps (the cost knob; `docs/ARCHITECTURE.md` §4.2). A body
@@ -213,8 +214,7 @@ pub enum Integrator {
         /// Sweeps per step.
         iterations: usize,
     },
-    /// The default, with 2 sweeps ([`Integrator::default`]). Per body: the explicit step where
-    /// it is cheap, [`Integrator::Midpoint`] where the
+    /// Per body: the explicit step where it is cheap, [`Integrator::Midpoint`] where the
     /// explicit step would take more than [`AUTO_SUBSTEPS`] substeps a step at rest (a stiff
     /// or finely meshed body at a game's frame rate). The choice follows the body's calibrated
     /// stable substep at rest and the step length, so it changes only with `dt`; the report
@@ -223,16 +223,6 @@ pub enum Integrator {
         /// Sweeps per implicit step.
         iterations: usize,
     },
-}
-
-/// `Auto { iterations: 2 }`: each body takes the explicit step unless that would cost more
-/// than a few substeps a step. The 10 cm silicone ball of `scenes ball` (E = 1 MPa, 823 nodes,
-/// edge repulsion) dropped at 60 Hz costs 33 ms a step under the explicit step (95 substeps a
-/// step), 14 ms so (one core of a 2-core machine).
-impl Default for Integrator {
-    fn default() -> Self {
-        Integrator::Auto { iterations: 2 }
-    }
 }
 
 /// Explicit substeps a step above which [`Integrator::Auto`] takes the implicit step. An

@@ -42,7 +42,7 @@ pub struct BallScene {
     pub dt: Real,
     /// Simulated time, s.
     pub seconds: Real,
-    /// sinew's integrator (default: the library's, [`Integrator::default`]).
+    /// sinew's integrator.
     pub integrator: Integrator,
 }
 
@@ -64,7 +64,7 @@ impl Default for BallScene {
             restitution: 0.5,
             dt: 1.0 / 60.0,
             seconds: 3.0,
-            integrator: Integrator::default(),
+            integrator: Integrator::Explicit,
         }
     }
 }
