@@ -49,8 +49,8 @@ pub(crate) struct AfterContacts<'a> {
     /// the collider surface that stopped it (it may lift off along the normal).
     pub lift: &'a [Option<(Vector, Vector)>],
     /// Per node, its share of the dynamic bodies its contacts met that are lighter than the
-    /// deformable (zero for none): it carries them ([`Hold::Carries`]) instead of being held
-    /// where they go.
+    /// deformable (zero for none; empty when no node meets one): it carries them
+    /// ([`Hold::Carries`]) instead of being held where they go.
     pub carried: &'a [Real],
 }
 
@@ -579,10 +579,12 @@ fn held_nodes(body: &Deformable, h: Real, after: Option<AfterContacts<'_>>) -> V
                 return Hold::At(at);
             }
             match after {
-                Some(a) if v[i] != a.before[i] && a.carried[i] > 0.0 => Hold::Carries {
-                    target: at,
-                    mass: a.carried[i],
-                },
+                Some(a) if v[i] != a.before[i] && a.carried.get(i).is_some_and(|&m| m > 0.0) => {
+                    Hold::Carries {
+                        target: at,
+                        mass: a.carried[i],
+                    }
+                }
                 Some(a) if v[i] != a.before[i] => match a.lift[i] {
                     Some((point, normal)) => {
                         // If it lifts off, the lowest it may end: where the contact set it less

@@ -281,7 +281,7 @@ fn step_together(
             carried: if m.live {
                 carried.carried.clone()
             } else {
-                vec![0.0; m.body.num_nodes()]
+                Vec::new()
             },
             body: &mut *m.body,
             reactions: Vec::new(),
@@ -684,7 +684,7 @@ struct Carried {
     rows: Vec<Real>,
     /// Per node, the sum of its shares.
     nodes: Vec<Real>,
-    /// Per node, the sum of its shares if it carries them, else zero.
+    /// Per node, the sum of its shares if it carries them, else zero (empty: none carries).
     carried: Vec<Real>,
 }
 
@@ -696,6 +696,14 @@ impl Carried {
         at: &Substep<'_>,
         bodies: &RigidBodySet,
     ) -> Self {
+        // Most substeps meet no dynamic body: nothing to carry, nothing allocated.
+        if rows.is_empty() {
+            return Carried {
+                rows: Vec::new(),
+                nodes: Vec::new(),
+                carried: Vec::new(),
+            };
+        }
         let mut count = vec![0usize; candidates.len()];
         for r in rows {
             count[r.candidate] += 1;
