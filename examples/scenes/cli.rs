@@ -146,7 +146,7 @@ pub struct Args {
     #[arg(long)]
     pub sweeps: Option<usize>,
     /// Conjugate-gradient iterations of the implicit steps' Newton step over each whole body,
-    /// before the sweeps (`PipelineSettings::global_iterations`; cantilever and bending;
+    /// before the sweeps (`PipelineSettings::global_iterations`; cantilever, bending and roll;
     /// default 0: none).
     #[arg(long)]
     pub global: Option<usize>,
@@ -952,6 +952,7 @@ macro_rules! dimension_runner {
                                     subject,
                                     box_mass: mass as Real,
                                     integrator: cube.integrator,
+                                    global_iterations: args.global.unwrap_or(0),
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
                                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                     material: material(args, d.material),

@@ -644,3 +644,63 @@ fn a_body_thrown_at_a_free_cube_conserves_momentum_and_creates_no_energy() {
         );
     }
 }
+
+/// How far a body set on a `slope`-radian ramp of `friction` (its mesh turned with the ramp)
+/// moves in `seconds` at 60 Hz under `integrator`.
+fn on_a_ramp(
+    mesh: Mesh,
+    model: ElementModel,
+    integrator: Integrator,
+    (slope, friction, seconds): (Real, Real, Real),
+) -> Real {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    world.pipeline.settings.integrator = integrator;
+    ground(&mut world, friction, slope);
+    let rotation = math::rotation_from_angle(math::planar_angle(slope));
+    let low = mesh
+        .nodes()
+        .iter()
+        .map(|p| p.dot(UP))
+        .fold(Real::INFINITY, Real::min);
+    let body = DeformableBuilder::new(mesh)
+        .model(model)
+        .material(Material {
+            density: 400.0,
+            young_modulus: 1e5,
+            damping_ratio: 0.3,
+            ..Default::default()
+        })
+        .friction(friction)
+        .restitution(0.0)
+        .rotation(rotation)
+        .translation(rotation * (UP * (0.002 - low)))
+        .build()
+        .unwrap();
+    let h = world.insert(body);
+    let start = world.deformables[h].center_of_mass();
+    for _ in 0..(seconds * 60.0).round() as usize {
+        world.step();
+    }
+    world.deformables[h].center_of_mass().distance(start)
+}
+
+#[test]
+fn a_cube_stays_on_a_ramp_its_friction_holds_it_on_under_the_implicit_steps() {
+    // Held by friction (0.8 > tan 30°) and upright (its centre of mass over its base), a cube
+    // set on a 30° ramp stays where it is: the contacts that hold its nodes where they were set
+    // must not let it creep down.
+    let slope = Real::to_radians(30.0);
+    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
+        for integrator in [
+            Integrator::Implicit { iterations: 2 },
+            Integrator::Midpoint { iterations: 2 },
+        ] {
+            let cube = Mesh::cuboid(Vector::splat(0.1), [4; DIM], CellKind::Simplex).unwrap();
+            let moved = on_a_ramp(cube, model, integrator, (-slope, 0.8, 2.0));
+            let name = format!("{model:?} {integrator:?}");
+            eprintln!("{name}: cube moved {moved:.4} m");
+            assert!(moved < 0.01, "{name}: moved {moved} m");
+        }
+    }
+}

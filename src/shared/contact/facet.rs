@@ -20,13 +20,13 @@ pub(crate) struct FacetMotion {
 /// Tests the features of the facet's candidates against the facet (nodes `facet.nodes`, inverse
 /// masses `facet.inv_masses`), which moves from `facet.x` (substep start) to `facet.y` (predicted
 /// end), both outward oriented. A feature counts only if it crosses the facet's plane during the substep
-/// (outside at the start, within a sliver of tolerance, and behind it at the end) inside the
-/// facet's prism (a round feature: see [`separation`]): a feature deep behind one facet belongs
-/// to another. Returns the deepest crossing, as a contact whose target puts the facet on the
-/// feature at the end of the substep.
+/// (outside at the start, within `slack` times the facet's size, and behind it at the end)
+/// inside the facet's prism (a round feature: see [`separation`]): a feature deep behind one
+/// facet belongs to another. Returns the deepest crossing, as a contact whose target puts the
+/// facet on the feature at the end of the substep.
 pub(crate) fn resolve_facet(
     facet: &FacetMotion,
-    at: &Substep<'_>,
+    (at, slack): (&Substep<'_>, Real),
     candidate_ids: &[u32],
     candidates: &[Candidate<'_>],
     bodies: &RigidBodySet,
@@ -50,7 +50,7 @@ pub(crate) fn resolve_facet(
             size = size.max(y[a].distance(y[b]));
         }
     }
-    let tolerance = 1e-3 * size;
+    let tolerance = slack * size;
     let denom_of = |w: &[Real; FACET_ARITY]| -> Real {
         w.iter().zip(inv_masses).map(|(w, im)| w * w * im).sum()
     };

@@ -905,6 +905,16 @@ fn sweep_contacts(
     )
 }
 
+/// How far behind a surface facet a rigid feature may start a substep and still press it
+/// ([`contact::resolve_facet`]), over the facet's size, under the explicit step: a sliver.
+const EXPLICIT_FACET_SLACK: Real = 1e-3;
+
+/// [`EXPLICIT_FACET_SLACK`] under the implicit step, whose few sweeps may leave a pressed
+/// facet millimetres behind the feature that pressed it: with a sliver, a light box rocking on
+/// a soft 2D slab at 60 Hz lost every facet contact once a corner ended a step behind, and
+/// sank through the slab.
+const IMPLICIT_FACET_SLACK: Real = 0.05;
+
 /// How a member's contacts act on the dynamic bodies it pushes, and on its own cells.
 #[derive(Copy, Clone, Debug)]
 struct Sharing {
@@ -1141,7 +1151,13 @@ fn facet_contacts(
                 inv_masses,
             };
             let ids = &broad.facet_cands[b0..b1];
-            let Some(mut c) = contact::resolve_facet(&motion, at, ids, candidates, bodies) else {
+            let slack = if sharing.explicit {
+                EXPLICIT_FACET_SLACK
+            } else {
+                IMPLICIT_FACET_SLACK
+            };
+            let Some(mut c) = contact::resolve_facet(&motion, (at, slack), ids, candidates, bodies)
+            else {
                 break;
             };
             if sharing.defer && candidates[c.candidate].dynamic {

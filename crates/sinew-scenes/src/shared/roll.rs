@@ -52,6 +52,9 @@ pub struct RollScene {
     pub seconds: Real,
     /// sinew's integrator.
     pub integrator: Integrator,
+    /// [`PipelineSettings::global_iterations`](sinew::dim3::PipelineSettings::global_iterations)
+    /// of the implicit steps.
+    pub global_iterations: usize,
 }
 
 impl Default for RollScene {
@@ -78,6 +81,7 @@ impl Default for RollScene {
             dt: 1.0 / 60.0,
             seconds: 3.0,
             integrator: Integrator::Explicit,
+            global_iterations: 0,
         }
     }
 }
@@ -113,6 +117,7 @@ impl RollScene {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
+        world.pipeline.settings.global_iterations = self.global_iterations;
         let run = self.distance + 5.0;
         world.physics.insert(
             RigidBodyBuilder::fixed(),
