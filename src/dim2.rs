@@ -161,6 +161,12 @@ pub mod math {
         }
     }
 
+    /// The angular acceleration of masses turning rigidly with no torque: zero in 2D, where
+    /// every turn is about a principal axis.
+    pub fn torque_free_acceleration(_r: &[Vector], _m: &[Real], _w: AngVector) -> AngVector {
+        0.0
+    }
+
     /// The rotation of the polar decomposition of `a = Σ r_i R0_iᵀ`: in 2D the angle
     /// `atan2(a₂₁ − a₁₂, a₁₁ + a₂₂)`, which is the shape-based paper's eq. 9.
     pub fn polar_rotation(a: Matrix) -> Rotation {

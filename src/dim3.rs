@@ -167,6 +167,23 @@ pub mod math {
         inertia.inverse() * l
     }
 
+    /// The angular acceleration of masses `m` at offsets `r` (from their centre of mass)
+    /// turning rigidly at `w` with no torque: `α = −I⁻¹ (w × I w)` (Euler's equations;
+    /// zero about a principal axis). Zero when the masses are (nearly) collinear.
+    pub fn torque_free_acceleration(r: &[Vector], m: &[Real], w: AngVector) -> AngVector {
+        let mut inertia = Matrix::ZERO;
+        for (ri, mi) in r.iter().zip(m) {
+            inertia +=
+                (Matrix::from_diagonal(Vector::splat(ri.length_squared())) - outer(*ri, *ri)) * *mi;
+        }
+        let d = inertia.determinant();
+        let scale = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
+        if d.abs() <= 1e-9 * scale * scale * scale {
+            return Vector::ZERO;
+        }
+        -(inertia.inverse() * w.cross(inertia * w))
+    }
+
     /// The smallest sum of two singular values of `a` (`σ₂ + σ₃`): how fast the rotation of
     /// `a`'s polar decomposition can turn as `a` changes (`|δR| ≤ |δa| / (σ₂ + σ₃)`).
     pub fn least_singular_pair_sum(a: Matrix) -> Real {

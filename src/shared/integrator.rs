@@ -486,6 +486,7 @@ impl Integrator {
                         h,
                         iterations,
                         global: 0,
+                        chords: true,
                     };
                     body.state.elements.begin_implicit(&input, x)
                 })
@@ -636,6 +637,7 @@ fn implicit_pass(
         h,
         iterations,
         global: body.step.global_iterations,
+        chords: !body.step.midpoint.under_way(),
     };
     body.state.elements.implicit_step(&input, &mut x, reactions);
     let x0 = &body.state.positions;

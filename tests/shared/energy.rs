@@ -405,3 +405,34 @@ fn the_midpoint_step_turns_no_cell_inside_out() {
         }
     }
 }
+
+#[test]
+fn the_implicit_step_keeps_a_spin() {
+    // Carried straight ahead, a spinning body's nodes ended each step farther out, the step
+    // pulled them back in, and the body spun slower: at 60 Hz with two sweeps a box kept 54 %
+    // of its angular momentum over 5 s.
+    let mut failed = Vec::new();
+    // Off every principal axis (3D), and about one.
+    for spin in [spin(), ang_from_components([3.0, 0.0, 0.0])] {
+        for model in [
+            ElementModel::Springs,
+            ElementModel::NonlinearSprings,
+            ElementModel::EdgeRepulsion,
+            ElementModel::SHAPE_MATCHING,
+        ] {
+            let integrator = Integrator::Implicit { iterations: 2 };
+            let e = run_stiff(model, integrator, spin, 0.0, 1e6, 5.0);
+            eprintln!(
+                "spin {spin:?} {}: angular momentum {:.2e} off, energy {:+.2e} … {:+.2e}",
+                model.name(),
+                e.momentum,
+                e.low,
+                e.peak
+            );
+            if e.momentum > 0.01 || e.peak > 0.01 {
+                failed.push(format!("{spin:?} {} {e:?}", model.name()));
+            }
+        }
+    }
+    assert!(failed.is_empty(), "spin not kept: {failed:?}");
+}

@@ -101,6 +101,11 @@ impl MidpointState {
         self.pending = None;
     }
 
+    /// Whether a midpoint step is under way ([`begin`] to [`finish`]).
+    pub fn under_way(&self) -> bool {
+        self.pending.is_some()
+    }
+
     /// What a snapshot keeps.
     #[cfg(feature = "serde")]
     pub fn carry(&self) -> MidpointCarry {

@@ -15,7 +15,14 @@
 //! `h² g` each step, and it rested 3 % low at 3 sweeps.) A body with no held node then moves
 //! as a whole by the best translation, which is exact because the energy does not change under
 //! one: `Σ m (y − x) / Σ m`. Gauss–Seidel hardly moves a body much stiffer than `m/h²` as a
-//! whole; with this its free flight is ballistic whatever the sweeps. Edge-repulsion terms are
+//! whole; with this its free flight is ballistic whatever the sweeps.
+//!
+//! The prediction carries a body's rigid turn on ([`carried_ahead`]): a backward-Euler step's
+//! velocities are chords, and `x₀ + h v₀` takes every node of a spinning body straight out
+//! along its chord; the step pulls it back in and takes the spin with it. `y` adds the turn's
+//! centripetal and Euler parts for the turn per step the chords fit, so a rigid spin is the
+//! step's minimiser and carries on (the midpoint step, whose velocities are not chords, keeps
+//! its turn by its own rule). Edge-repulsion terms are
 //! evaluated once per cell and vertex from the cell's volume gradients
 //! ([`math::simplex_gradients`]). A large body sweeps by slabs of consecutive nodes, on rayon's
 //! threads with feature `parallel` ([`Solve::sweep_alone`]).
@@ -359,6 +366,9 @@ pub(crate) struct StepInput<'a> {
     /// Conjugate-gradient iterations of a Newton step over the whole body before the sweeps
     /// ([`global`]; 0: none).
     pub global: usize,
+    /// Whether `v0` are a backward-Euler step's chord velocities, whose rigid turn the step
+    /// carries on ([`carried_ahead`]); not in the midpoint step, which keeps the turn itself.
+    pub chords: bool,
 }
 
 impl ModelState {
@@ -425,9 +435,14 @@ impl ModelState {
             .get_or_init(|| Incidence::of(elements, volume, n))
             .as_ref()?;
         let (x0, v0, h) = (input.x0, input.v0, input.h);
+        let ahead = if input.chords {
+            carried_ahead(x0, v0, input.masses, h)
+        } else {
+            x0.iter().zip(v0).map(|(x, v)| *x + *v * h).collect()
+        };
         let y: Vec<Vector> = (0..n)
             .map(|i| {
-                let own = x0[i] + v0[i] * h + input.gravity * (h * h);
+                let own = ahead[i] + input.gravity * (h * h);
                 match input.held[i] {
                     // The node and the mass it carries, each drawn to its own prediction.
                     Hold::Carries { target, mass } => {
@@ -443,7 +458,7 @@ impl ModelState {
         match input.start {
             Some(start) => x.extend((0..n).map(|i| held[i].start(start[i], x0[i]))),
             None => {
-                x.extend((0..n).map(|i| held[i].start(x0[i] + v0[i] * h, x0[i])));
+                x.extend((0..n).map(|i| held[i].start(ahead[i], x0[i])));
                 if held.iter().any(|h| *h != Hold::Free) {
                     start_scaled(elements, volume, input, (&held, &y), x);
                 }
@@ -497,8 +512,8 @@ impl ModelState {
             vertex,
             held,
             y,
+            ahead,
             masses: input.masses,
-            v0,
             gravity: input.gravity,
             h,
         })
@@ -528,8 +543,9 @@ pub(crate) struct Solve<'a> {
     held: Vec<Hold>,
     /// Each node's inertial prediction (a held node's hold).
     y: Vec<Vector>,
+    /// Where each node's motion carries it ([`carried_ahead`]).
+    ahead: Vec<Vector>,
     masses: &'a [Real],
-    v0: &'a [Vector],
     gravity: Vector,
     h: Real,
 }
@@ -686,7 +702,7 @@ impl Solve<'_> {
                 return Vector::ZERO;
             }
             let inertia = self.masses[i] / (h * h);
-            let inertial = vertex.x0[i] + self.v0[i] * h + self.gravity * (h * h);
+            let inertial = self.ahead[i] + self.gravity * (h * h);
             -vertex.newton(i, x, inertia, inertial).0
         }));
         if translate && held.iter().all(|h| *h == Hold::Free) {
@@ -705,6 +721,46 @@ impl Solve<'_> {
         }
         self.vertex.shape.map(|s| s.rotations)
     }
+}
+
+/// Where each node's motion carries it over a step of length `h` without forces: `x₀ + h v₀`
+/// plus the part of the body's rigid turn that a straight line misses, its centripetal and
+/// Euler accelerations `ω × (ω × r) + α × r` (`r` the node's offset from the centre of mass,
+/// `α = −I⁻¹ (ω × I ω)`, which cancels the centripetal part's torque), times
+/// `2 (1 − cos θ)/|ω|²` for the turn per step `θ` whose chord velocities (a backward-Euler
+/// step's) the body's rigid angular velocity `ω` fits: `sin θ = h |ω|` (at most 30° a step).
+/// Straight ahead, every node of a spinning body ends farther out, the step pulls it back in
+/// and the body spins slower: a box spun at 3 rad/s kept 54 % of its angular momentum over 5 s
+/// at 60 Hz with two sweeps. With it a rigid turn carries on.
+fn carried_ahead(x0: &[Vector], v0: &[Vector], masses: &[Real], h: Real) -> Vec<Vector> {
+    let mut ahead: Vec<Vector> = x0.iter().zip(v0).map(|(x, v)| *x + *v * h).collect();
+    let mass: Real = masses.iter().sum();
+    if mass.is_nan() || mass <= 0.0 {
+        return ahead;
+    }
+    let centre = x0.iter().zip(masses).map(|(p, m)| *p * *m).sum::<Vector>() / mass;
+    let velocity = v0.iter().zip(masses).map(|(v, m)| *v * *m).sum::<Vector>() / mass;
+    let r: Vec<Vector> = x0.iter().map(|p| *p - centre).collect();
+    let momentum = r
+        .iter()
+        .zip(v0)
+        .zip(masses)
+        .map(|((r, v), m)| math::cross(*r, (*v - velocity) * *m))
+        .fold(math::ANG_ZERO, |a, b| a + b);
+    let omega = math::angular_velocity_for(&r, masses, momentum);
+    let spin = math::ang_dot(omega, omega);
+    let sine = (spin.sqrt() * h).min(0.5);
+    if sine.is_nan() || sine <= 1e-6 {
+        return ahead;
+    }
+    let scale = 2.0 * (1.0 - sine.asin().cos()) / spin;
+    let alpha = math::torque_free_acceleration(&r, masses, omega);
+    for (a, r) in ahead.iter_mut().zip(&r) {
+        let turning =
+            math::ang_cross(omega, math::ang_cross(omega, *r)) + math::ang_cross(alpha, *r);
+        *a += turning * scale;
+    }
+    ahead
 }
 
 /// `f(i)` for each node of `nodes`, in order (`backward`: last first).

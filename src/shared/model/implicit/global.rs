@@ -735,6 +735,7 @@ mod tests {
                 h: 1.0 / 60.0,
                 iterations: 1,
                 global: 0,
+                chords: true,
             };
             let mut x = Vec::new();
             let solve = body.state.elements.begin_implicit(&input, &mut x).unwrap();
