@@ -161,13 +161,12 @@ pub enum Integrator {
     /// that may touch (or have self contact on) are solved as one island with their contacts;
     /// islands of the other models step explicitly (`docs/ARCHITECTURE.md` §4.2).
     ///
-    /// Backward Euler removes some of every motion, rigid rotation included: undamped, the
-    /// soft box of `tests/shared/energy.rs` (E = 10⁴ Pa) tumbling at 1.5 rad/s loses 38–39 % of
-    /// its energy and 20 % of its angular momentum in 10 s at 60 Hz, every model, 2 or 10
-    /// sweeps; a free vibration loses more. An unconverged step can also add energy: the same
-    /// box made stiff (E = 10⁷–10⁸ Pa) with edge repulsion ends the tumble 13–49 % above its
-    /// start, its spin axis turned by up to 38°. Use the explicit step where a spin or a ring
-    /// must last.
+    /// Backward Euler damps deformation: undamped, a free vibration of the soft box of
+    /// `tests/shared/energy.rs` (E = 10⁴ Pa) loses 17–28 % of its energy in 10 s at 60 Hz. Its
+    /// prediction carries a body's rigid turn on, so a spin is kept: the same box tumbling at
+    /// 1.5 rad/s keeps its energy to 0.02 % and its angular momentum to 0.2 % (made stiff,
+    /// E = 10⁷–10⁸ Pa, edge repulsion, 2 or 10 sweeps: energy within +0.3–1.9 %). Use the
+    /// explicit step, or [`Integrator::Midpoint`], where a ring must last.
     ///
     /// A few sweeps do not converge on a stiff, slender body, whose bending carries a load
     /// across many cells: released under its weight, the 10:1 cantilever of `scenes bending`
