@@ -154,6 +154,12 @@ pub mod math {
     /// mass) the angular momentum `l`: `I ω = l`, `I = Σ m (|r|² 𝟙 − r rᵀ)`. Zero when the
     /// masses are (nearly) collinear.
     pub fn angular_velocity_for(r: &[Vector], m: &[Real], l: AngVector) -> AngVector {
+        inertia_of(r, m).map_or(Vector::ZERO, |inertia| inertia.inverse() * l)
+    }
+
+    /// The inertia tensor `Σ m (|r|² 𝟙 − r rᵀ)` of masses `m` at offsets `r`; `None` when they
+    /// are (nearly) collinear (it is singular).
+    fn inertia_of(r: &[Vector], m: &[Real]) -> Option<Matrix> {
         let mut inertia = Matrix::ZERO;
         for (ri, mi) in r.iter().zip(m) {
             inertia +=
@@ -161,27 +167,16 @@ pub mod math {
         }
         let d = inertia.determinant();
         let scale = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
-        if d.abs() <= 1e-9 * scale * scale * scale {
-            return Vector::ZERO;
-        }
-        inertia.inverse() * l
+        (d.abs() > 1e-9 * scale * scale * scale).then_some(inertia)
     }
 
     /// The angular acceleration of masses `m` at offsets `r` (from their centre of mass)
     /// turning rigidly at `w` with no torque: `α = −I⁻¹ (w × I w)` (Euler's equations;
     /// zero about a principal axis). Zero when the masses are (nearly) collinear.
     pub fn torque_free_acceleration(r: &[Vector], m: &[Real], w: AngVector) -> AngVector {
-        let mut inertia = Matrix::ZERO;
-        for (ri, mi) in r.iter().zip(m) {
-            inertia +=
-                (Matrix::from_diagonal(Vector::splat(ri.length_squared())) - outer(*ri, *ri)) * *mi;
-        }
-        let d = inertia.determinant();
-        let scale = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
-        if d.abs() <= 1e-9 * scale * scale * scale {
-            return Vector::ZERO;
-        }
-        -(inertia.inverse() * w.cross(inertia * w))
+        inertia_of(r, m).map_or(Vector::ZERO, |inertia| {
+            -(inertia.inverse() * w.cross(inertia * w))
+        })
     }
 
     /// The smallest sum of two singular values of `a` (`σ₂ + σ₃`): how fast the rotation of
