@@ -161,10 +161,11 @@ pub mod math {
         }
     }
 
-    /// The angular acceleration of masses turning rigidly with no torque: zero in 2D, where
-    /// every turn is about a principal axis.
-    pub fn torque_free_acceleration(_r: &[Vector], _m: &[Real], _w: AngVector) -> AngVector {
-        0.0
+    /// The rigid turn of masses `m` at offsets `r` (from their centre of mass) with angular
+    /// momentum `l`: its angular velocity ([`angular_velocity_for`]) and its angular
+    /// acceleration with no torque, zero in 2D, where every turn is about a principal axis.
+    pub fn torque_free_turn(r: &[Vector], m: &[Real], l: AngVector) -> (AngVector, AngVector) {
+        (angular_velocity_for(r, m, l), 0.0)
     }
 
     /// The rotation of the polar decomposition of `a = Σ r_i R0_iᵀ`: in 2D the angle

@@ -170,12 +170,15 @@ pub mod math {
         (d.abs() > 1e-9 * scale * scale * scale).then_some(inertia)
     }
 
-    /// The angular acceleration of masses `m` at offsets `r` (from their centre of mass)
-    /// turning rigidly at `w` with no torque: `α = −I⁻¹ (w × I w)` (Euler's equations;
-    /// zero about a principal axis). Zero when the masses are (nearly) collinear.
-    pub fn torque_free_acceleration(r: &[Vector], m: &[Real], w: AngVector) -> AngVector {
-        inertia_of(r, m).map_or(Vector::ZERO, |inertia| {
-            -(inertia.inverse() * w.cross(inertia * w))
+    /// The rigid turn of masses `m` at offsets `r` (from their centre of mass) with angular
+    /// momentum `l`: its angular velocity `ω = I⁻¹ l` ([`angular_velocity_for`]) and its
+    /// angular acceleration with no torque, `α = −I⁻¹ (ω × I ω)` (Euler's equations; zero
+    /// about a principal axis). Both zero when the masses are (nearly) collinear.
+    pub fn torque_free_turn(r: &[Vector], m: &[Real], l: AngVector) -> (AngVector, AngVector) {
+        inertia_of(r, m).map_or((Vector::ZERO, Vector::ZERO), |inertia| {
+            let inverse = inertia.inverse();
+            let w = inverse * l;
+            (w, -(inverse * w.cross(inertia * w)))
         })
     }
 

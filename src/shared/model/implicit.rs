@@ -747,14 +747,13 @@ fn carried_ahead(x0: &[Vector], v0: &[Vector], masses: &[Real], h: Real) -> Vec<
         .zip(masses)
         .map(|((r, v), m)| math::cross(*r, (*v - velocity) * *m))
         .fold(math::ANG_ZERO, |a, b| a + b);
-    let omega = math::angular_velocity_for(&r, masses, momentum);
+    let (omega, alpha) = math::torque_free_turn(&r, masses, momentum);
     let spin = math::ang_dot(omega, omega);
     let sine = (spin.sqrt() * h).min(0.5);
     if sine.is_nan() || sine <= 1e-6 {
         return ahead;
     }
     let scale = 2.0 * (1.0 - sine.asin().cos()) / spin;
-    let alpha = math::torque_free_acceleration(&r, masses, omega);
     for (a, r) in ahead.iter_mut().zip(&r) {
         let turning =
             math::ang_cross(omega, math::ang_cross(omega, *r)) + math::ang_cross(alpha, *r);
