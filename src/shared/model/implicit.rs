@@ -62,7 +62,7 @@ use std::ops::Range;
 
 use super::super::math::{self, Matrix, Real, Rotation, Vector, SIMPLEX_ARITY};
 use super::super::threads;
-use super::edge_repulsion::{EdgeRepulsion, MIN_HEIGHT_RATIO};
+use super::edge_repulsion::EdgeRepulsion;
 use super::hessian;
 use super::shape_matching::ShapeMatching;
 use super::springs::{Law, Springs};
@@ -1146,13 +1146,26 @@ fn repulsion_terms(
         let inv_g2 = 1.0 / g2;
         let len = g2.sqrt();
         let h = d * len * inv_g2;
-        let q = h0 / h.max(MIN_HEIGHT_RATIO * h0);
+        let (push, stiffness) = barrier(h, h0, k);
         // The share of the term at `a`: 1 at the vertex, minus its foot weight on the facet.
         let share = if b == a { 1.0 } else { g[a].dot(*gb) * inv_g2 };
-        f += *gb * (sign * len * inv_g2 * k * (h0 * q - h) * share);
-        block += math::outer(*gb, *gb) * (inv_g2 * k * (1.0 + q * q) * share * share);
+        f += *gb * (sign * len * inv_g2 * push * share);
+        block += math::outer(*gb, *gb) * (inv_g2 * stiffness * share * share);
     }
     (f, block)
+}
+
+/// A repulsion's push `k (h0²/h − h)` and stiffness `k (1 + h0²/h²)` at height `h`, continued
+/// below [`MIN_STEP_HEIGHT`] of the rest height by the law's tangent there (a quadratic energy):
+/// a cell held that flat or turned inside out gets a Newton step that brings it back up to
+/// that height, where the law's own stiffness (~10¹² k, clamped only near zero) gives it none.
+#[inline(always)]
+fn barrier(h: Real, h0: Real, k: Real) -> (Real, Real) {
+    let low = MIN_STEP_HEIGHT * h0;
+    let at = h.max(low);
+    let q = h0 / at;
+    let stiffness = k * (1.0 + q * q);
+    (k * (h0 * q - at) + stiffness * (at - h), stiffness)
 }
 
 /// Whether every repulsion of `cell` (its vertices at `p`) keeps its vertex above

@@ -13,8 +13,8 @@
 use super::super::super::math::{self, AngVector, Matrix, Real, Vector, DIM, SIMPLEX_ARITY};
 use super::hessian;
 use super::{
-    cell_geometry, cell_positions, cell_upright, height_ratio, invert, unit, Hold, Law, Solve,
-    MIN_HEIGHT_RATIO, MIN_STEP_VOLUME,
+    barrier, cell_geometry, cell_positions, cell_upright, height_ratio, invert, unit, Hold, Law,
+    Solve, MIN_STEP_VOLUME,
 };
 
 /// An edge-repulsion term's Gauss–Newton Hessian `k (s ⊗ g)(s ⊗ g)ᵀ`: at each vertex `a` of
@@ -516,12 +516,12 @@ impl Solve<'_> {
                     let slot = cell * SIMPLEX_ARITY + b;
                     let (h0, k) = (er.h0[slot], er.k[slot]);
                     let height = d / g2.sqrt();
-                    let q = h0 / height.max(MIN_HEIGHT_RATIO * h0);
+                    let (_, stiffness) = barrier(height, h0, k);
                     let shares =
                         std::array::from_fn(|a| if a == b { 1.0 } else { g[a].dot(*gb) / g2 });
                     repulsions.push(Repulsion {
                         g: *gb,
-                        k: k * (1.0 + q * q) / g2,
+                        k: stiffness / g2,
                         shares,
                     });
                 }
