@@ -10,6 +10,9 @@ pub mod math {
     /// An angular quantity (torque, angular velocity, angular momentum): a scalar in 2D.
     pub type AngVector = Real;
 
+    /// A linear map of angular quantities (an inverse inertia): a scalar in 2D.
+    pub type AngMatrix = Real;
+
     /// Number of vertices of a simplex cell (triangle).
     pub const SIMPLEX_ARITY: usize = 3;
     /// Number of vertices of a facet of a simplex (an edge).
@@ -146,9 +149,9 @@ pub mod math {
         }
     }
 
-    /// The angular velocity `ω` that gives masses `m` at offsets `r` (from their centre of
-    /// mass) the angular momentum `l`: `ω = l / Σ m |r|²`.
-    pub fn angular_velocity_for(r: &[Vector], m: &[Real], l: AngVector) -> AngVector {
+    /// The inverse inertia `1 / Σ m |r|²` of masses `m` at offsets `r` (from their centre of
+    /// mass); zero when they all sit at the centre.
+    pub fn inverse_inertia(r: &[Vector], m: &[Real]) -> AngMatrix {
         let i: Real = r
             .iter()
             .zip(m)
@@ -157,8 +160,14 @@ pub mod math {
         if i <= Real::MIN_POSITIVE {
             0.0
         } else {
-            l / i
+            1.0 / i
         }
+    }
+
+    /// The angular velocity `ω` that gives masses `m` at offsets `r` (from their centre of
+    /// mass) the angular momentum `l`: `ω = l / Σ m |r|²`.
+    pub fn angular_velocity_for(r: &[Vector], m: &[Real], l: AngVector) -> AngVector {
+        inverse_inertia(r, m) * l
     }
 
     /// The rigid turn of masses `m` at offsets `r` (from their centre of mass) with angular

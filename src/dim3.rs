@@ -11,6 +11,9 @@ pub mod math {
     /// An angular quantity (torque, angular velocity, angular momentum): a vector in 3D.
     pub type AngVector = Vector;
 
+    /// A linear map of angular quantities (an inverse inertia): a 3 × 3 matrix in 3D.
+    pub type AngMatrix = Matrix;
+
     /// Number of vertices of a simplex cell (tetrahedron).
     pub const SIMPLEX_ARITY: usize = 4;
     /// Number of vertices of a facet of a simplex (triangle).
@@ -155,6 +158,12 @@ pub mod math {
     /// masses are (nearly) collinear.
     pub fn angular_velocity_for(r: &[Vector], m: &[Real], l: AngVector) -> AngVector {
         inertia_of(r, m).map_or(Vector::ZERO, |inertia| inertia.inverse() * l)
+    }
+
+    /// The inverse of the inertia tensor of masses `m` at offsets `r` (from their centre of
+    /// mass); zero when they are (nearly) collinear.
+    pub fn inverse_inertia(r: &[Vector], m: &[Real]) -> AngMatrix {
+        inertia_of(r, m).map_or(Matrix::ZERO, |inertia| inertia.inverse())
     }
 
     /// The inertia tensor `Σ m (|r|² 𝟙 − r rᵀ)` of masses `m` at offsets `r`; `None` when they

@@ -52,6 +52,13 @@ pub(crate) struct AfterContacts<'a> {
     /// deformable (zero for none; empty when no node meets one): it carries them
     /// ([`Hold::Carries`]) instead of being held where they go.
     pub carried: &'a [Real],
+    /// Per node, whether a contact with a fixed or kinematic collider found it, when the body's
+    /// rigid motion answered those contacts first ([`contact::rigid_answer`]; empty when it did
+    /// not): such a node is held where its velocity takes it even if its own contact had
+    /// nothing left to do, and the sweeps start where the velocities take the body.
+    ///
+    /// [`contact::rigid_answer`]: super::contact::rigid_answer
+    pub touched: &'a [bool],
 }
 
 /// One way of advancing a body's velocities over a substep.
@@ -371,7 +378,8 @@ impl Integrate for Integrator {
         if stopped {
             // The nodes the contacts set are held where their velocities take them; the
             // others answer them in the same step, from the start.
-            implicit_pass(body, g, h, iterations, &held, false, reactions);
+            let warm = !at.touched.is_empty();
+            implicit_pass(body, g, h, iterations, &held, warm, reactions);
         } else if iterations > 1 {
             // No contact acted: the prediction was the step; it takes the remaining sweeps.
             implicit_pass(body, g, h, iterations - 1, &held, true, reactions);
@@ -428,6 +436,7 @@ impl Integrator {
                     before: &m.before,
                     lift: &m.lift,
                     carried: &m.carried,
+                    touched: &[],
                 };
                 held_nodes(m.body, h, Some(at))
             })
@@ -585,21 +594,23 @@ fn held_nodes(body: &Deformable, h: Real, after: Option<AfterContacts<'_>>) -> V
                         mass: a.carried[i],
                     }
                 }
-                Some(a) if v[i] != a.before[i] => match a.lift[i] {
-                    Some((point, normal)) => {
-                        // If it lifts off, the lowest it may end: where the contact set it less
-                        // the part of that which rises from where it was (a bounce), but never
-                        // under the collider's surface (a collider moving into it carries it).
-                        let rise = normal.dot(at - x0[i]).max(0.0);
-                        let off = normal.dot(at - point).max(0.0);
-                        Hold::Contact {
-                            target: at,
-                            normal,
-                            low: at - normal * rise.min(off),
+                Some(a) if v[i] != a.before[i] || a.touched.get(i) == Some(&true) => {
+                    match a.lift[i] {
+                        Some((point, normal)) => {
+                            // If it lifts off, the lowest it may end: where the contact set it less
+                            // the part of that which rises from where it was (a bounce), but never
+                            // under the collider's surface (a collider moving into it carries it).
+                            let rise = normal.dot(at - x0[i]).max(0.0);
+                            let off = normal.dot(at - point).max(0.0);
+                            Hold::Contact {
+                                target: at,
+                                normal,
+                                low: at - normal * rise.min(off),
+                            }
                         }
+                        None => Hold::Pressed(at),
                     }
-                    None => Hold::Pressed(at),
-                },
+                }
                 _ => Hold::Free,
             }
         })

@@ -210,10 +210,13 @@ fn a_cube_dropped_at_60_hz_bounces_as_high_as_at_1_ms() {
 #[test]
 fn with_fixed_substeps_the_midpoint_step_keeps_its_own_step_through_an_impact() {
     // Fixed substeps are the user's: an impact taken explicitly in one substep a step would
-    // blow up. The ball is then stopped by backward Euler's contact steps, whole.
+    // blow up. The ball takes backward Euler's contact steps instead, its rigid motion answering
+    // the wall as a rigid body's would: it leaves whole, no faster than the contact's
+    // restitution (0.8) sends it back.
+    let speed = 5.0;
     for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
         let midpoint = Integrator::Midpoint { iterations: 2 };
-        let (mut world, h) = throw_world(model, midpoint, 1.0 / 60.0, 5.0, 0.8);
+        let (mut world, h) = throw_world(model, midpoint, 1.0 / 60.0, speed, 0.8);
         world.pipeline.settings.fixed_substeps = Some(1);
         let mut inverted = 0;
         for _ in 0..24 {
@@ -222,22 +225,26 @@ fn with_fixed_substeps_the_midpoint_step_keeps_its_own_step_through_an_impact() 
             inverted = inverted.max(world.deformables[h].inverted_elements());
         }
         let b = &world.deformables[h];
-        assert!(!b.report().exploded, "{}", model.name());
-        assert_eq!(inverted, 0, "{}", model.name());
-        let speed = b.center_of_mass_velocity().length();
-        assert!(speed < 1.0, "{}: {speed} m/s", model.name());
+        let name = model.name();
+        assert!(!b.report().exploded, "{name}");
+        assert_eq!(inverted, 0, "{name}");
+        let v = b.center_of_mass_velocity();
+        eprintln!("{name}: left at {v}");
+        assert!(v.x < 0.0, "{name}: {v} m/s");
+        assert!(v.length() <= 0.8 * speed * 1.01, "{name}: {v} m/s");
     }
 }
 
 /// A 10 cm ball (2.5 cm cells, ζ = 0.3, friction 0.5, no restitution) thrown at 2 m/s from
 /// 0.4 m over a floor at a wall 0.6 m away, under `integrator` at 60 Hz for 1.5 s: it meets the
 /// floor and the wall in the same step. Returns its energy (kinetic, elastic, gravitational) at
-/// the start and at the end, its elastic energy at the end, and its inverted cells at the end.
+/// the start and at the end, its elastic energy at the end and at most, and its inverted cells
+/// at the end.
 fn into_a_crease(
     model: ElementModel,
     integrator: Integrator,
     (density, young): (Real, Real),
-) -> (Real, Real, Real, usize) {
+) -> (Real, Real, [Real; 2], usize) {
     let mut world = DeformableWorld::new();
     world.set_dt(1.0 / 60.0);
     world.pipeline.settings.integrator = integrator;
@@ -275,44 +282,45 @@ fn into_a_crease(
         b.kinetic_energy() + b.elastic_energy() + b.total_mass() * g * b.center_of_mass().y
     };
     let start = energy(&world);
+    let mut peak: Real = 0.0;
     for _ in 0..90 {
         world.step();
+        peak = peak.max(world.deformables[h].elastic_energy());
     }
     let b = &world.deformables[h];
-    (
-        start,
-        energy(&world),
-        b.elastic_energy(),
-        b.inverted_elements(),
-    )
+    let elastic = [b.elastic_energy(), peak];
+    (start, energy(&world), elastic, b.inverted_elements())
 }
 
 #[test]
 fn a_ball_thrown_into_a_crease_comes_out_of_it_upright() {
-    // At the corner the ball meets the floor and the wall within one 60 Hz step, and the
-    // sweeps leave cells crushed flat or inside out. Their nodes must still get Newton steps
-    // that bring them back: under a barrier's own stiffness there (~10¹² k) they got none, and
-    // the ball stayed crushed in the corner with 10 times the energy it was thrown with.
+    // At the corner the ball meets the floor and the wall within one 60 Hz step. Its contact
+    // nodes stopped and the rest coming on, two sweeps crushed it (edge repulsion: 124 J of
+    // elastic energy where 8 J were available, 22 cells inside out). Its rigid motion now
+    // answers the contacts first; and a cell left flat or inside out gets Newton steps back up.
     let (implicit, midpoint) = (
         Integrator::Implicit { iterations: 2 },
         Integrator::Midpoint { iterations: 2 },
     );
     let (soft, silicone) = ((400.0, 1e5), (1100.0, 1e6));
-    // Silicone under backward Euler is edge repulsion's case. (Shape matching, which has no
-    // barrier, relaxes from the corner so slowly at two sweeps that it falls asleep with a
-    // third of its energy still elastic; under the midpoint step edge repulsion stores up to
-    // 90 J in hops along the floor after the corner.)
+    // (The midpoint step is left out for silicone: taking the ball's hops along the floor
+    // after the corner in its own steps, it stores up to 90 J of elastic energy in them.)
     let cases = [
         (ElementModel::EdgeRepulsion, implicit, soft),
         (ElementModel::EdgeRepulsion, midpoint, soft),
         (ElementModel::EdgeRepulsion, implicit, silicone),
         (ElementModel::SHAPE_MATCHING, implicit, soft),
         (ElementModel::SHAPE_MATCHING, midpoint, soft),
+        (ElementModel::SHAPE_MATCHING, implicit, silicone),
     ];
     for (model, integrator, material) in cases {
         let name = format!("{} {integrator:?} {material:?}", model.name());
-        let (start, end, elastic, inverted) = into_a_crease(model, integrator, material);
-        eprintln!("{name}: {start:.3} J -> {end:.3} J, elastic {elastic:.4} J");
+        let (start, end, [elastic, peak], inverted) = into_a_crease(model, integrator, material);
+        eprintln!("{name}: {start:.3} J -> {end:.3} J, elastic {elastic:.4} J, at most {peak:.3}");
+        if integrator == implicit {
+            // Stopped in the corner whole, it stores little of what it brought.
+            assert!(peak < 0.1 * start, "{name}: elastic {peak} J of {start}");
+        }
         assert_eq!(inverted, 0, "{name}");
         assert!(end < start, "{name}: {start} J -> {end} J");
         assert!(

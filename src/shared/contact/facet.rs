@@ -17,16 +17,25 @@ pub(crate) struct FacetMotion {
     pub inv_masses: [Real; FACET_ARITY],
 }
 
+/// How far behind a facet a rigid feature may start a substep and still press it: `slack`
+/// times the facet's size, plus `crossing` times how far the feature goes through the facet's
+/// plane in the substep.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct FacetSlack {
+    pub slack: Real,
+    pub crossing: Real,
+}
+
 /// Tests the features of the facet's candidates against the facet (nodes `facet.nodes`, inverse
 /// masses `facet.inv_masses`), which moves from `facet.x` (substep start) to `facet.y` (predicted
 /// end), both outward oriented. A feature counts only if it crosses the facet's plane during the substep
-/// (outside at the start, within `slack` times the facet's size, and behind it at the end)
+/// (outside at the start, within the [`FacetSlack`], and behind it at the end)
 /// inside the facet's prism (a round feature: see [`separation`]): a feature deep behind one
 /// facet belongs to another. Returns the deepest crossing, as a contact whose target puts the
 /// facet on the feature at the end of the substep.
 pub(crate) fn resolve_facet(
     facet: &FacetMotion,
-    (at, slack): (&Substep<'_>, Real),
+    (at, allowed): (&Substep<'_>, FacetSlack),
     candidate_ids: &[u32],
     candidates: &[Candidate<'_>],
     bodies: &RigidBodySet,
@@ -50,7 +59,7 @@ pub(crate) fn resolve_facet(
             size = size.max(y[a].distance(y[b]));
         }
     }
-    let tolerance = slack * size;
+    let tolerance = allowed.slack * size;
     let denom_of = |w: &[Real; FACET_ARITY]| -> Real {
         w.iter().zip(inv_masses).map(|(w, im)| w * w * im).sum()
     };
@@ -71,7 +80,7 @@ pub(crate) fn resolve_facet(
             let c0 = cand.prev_pose.transform_point(f.local);
             let d0 = separation(x, n0, c0, f.radius)
                 .map_or_else(|| n0.dot(c0 - x[0]) - f.radius, |(d0, _, _)| d0);
-            if d0 < -tolerance {
+            if d0 < -tolerance - allowed.crossing * (d0 - d).max(0.0) {
                 continue;
             }
             if denom_of(&w) <= 0.0 {

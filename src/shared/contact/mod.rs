@@ -66,14 +66,16 @@ mod node;
 pub(crate) mod soft;
 pub(crate) mod soft_terms;
 mod solve;
+mod whole;
 
 pub(crate) use candidates::{
     broad_phase_is_current, candidate, near_colliders, node_candidates, translate_body, Candidate,
     Scan,
 };
-pub(crate) use facet::{resolve_facet, FacetMotion};
+pub(crate) use facet::{resolve_facet, FacetMotion, FacetSlack};
 pub(crate) use node::{penetration, resolve_node, surface_skin, FreeNode};
 pub(crate) use solve::Contact;
+pub(crate) use whole::rigid_answer;
 
 use super::math::{Real, Vector};
 use super::rapier::dynamics::CoefficientCombineRule;

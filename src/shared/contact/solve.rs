@@ -72,6 +72,29 @@ impl Contact {
         }
     }
 
+    /// The deformable's side of the contact at node positions `x` (its barycentric point).
+    pub(crate) fn node_point(&self, x: &[Vector]) -> Vector {
+        self.nodes
+            .iter()
+            .zip(&self.weights)
+            .map(|(&j, &w)| x[j as usize] * w)
+            .sum()
+    }
+
+    /// Solves the contact afresh (its impulses so far forgotten) on `velocities` changed since:
+    /// it pushes only as far as its target still asks.
+    pub(crate) fn solve_afresh(
+        &mut self,
+        velocities: &mut [Vector],
+        at: &Substep<'_>,
+        candidates: &[Candidate<'_>],
+        bodies: &mut RigidBodySet,
+    ) {
+        self.normal_impulse = 0.0;
+        self.friction_impulse = Vector::ZERO;
+        self.solve(velocities, at, candidates, bodies);
+    }
+
     /// Whether the contact's target includes a bounce.
     pub fn bounces(&self) -> bool {
         self.bounce > 0.0

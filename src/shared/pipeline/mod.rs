@@ -427,6 +427,7 @@ impl DeformablePipeline {
                     asleep: false,
                     touched: Vec::new(),
                     rigid_rows: Vec::new(),
+                    fixed_rows: Vec::new(),
                     shares_bodies: work.shared.iter().any(|p| p.0 == handle || p.1 == handle),
                 })
                 .collect();

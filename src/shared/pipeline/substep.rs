@@ -5,7 +5,7 @@ use super::super::attach::{self, DrivenNodes};
 use super::super::body::Deformable;
 use super::super::contact::soft::{self, NearFacets};
 use super::super::contact::soft_terms;
-use super::super::contact::{self, Contact, FacetMotion, FreeNode};
+use super::super::contact::{self, Contact, FacetMotion, FacetSlack, FreeNode};
 use super::super::coupling::{self, BodyMotion, Substep};
 use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
 use super::super::math::{self, AngVector, Real, Vector, FACET_ARITY};
@@ -88,6 +88,9 @@ pub(super) struct Member<'m, 'a> {
     pub touched: Vec<usize>,
     /// This substep's contacts with dynamic rigid bodies, solved again with the island's.
     pub rigid_rows: Vec<Contact>,
+    /// This substep's node contacts with fixed and kinematic colliders, under the implicit
+    /// step (the body's rigid motion answers them first, [`contact::rigid_answer`]).
+    pub fixed_rows: Vec<Contact>,
     /// Whether another deformable may push a dynamic body it may push.
     pub shares_bodies: bool,
 }
@@ -588,6 +591,7 @@ fn advance(
         split: !m.shares_bodies,
         defer: m.shares_bodies && !answers,
         explicit: !answers,
+        facet_slack: facet_slack(body, answers),
     };
     // Velocities first (the contacts act on them), from the element forces and gravity.
     body.step
@@ -615,11 +619,14 @@ fn advance(
     let candidates = &mut m.candidates;
     let rows = &mut m.rigid_rows;
     rows.clear();
+    let fixed = &mut m.fixed_rows;
+    fixed.clear();
     if candidates.is_empty() {
         return together.then(|| body.state.velocities.clone());
     }
     let stats = &mut m.stats;
     let before = answers.then(|| body.state.velocities.clone());
+    let mut facets = 0;
     timed(&mut m.times.contacts, || {
         for c in candidates.iter_mut() {
             c.advance(at.s1, at.dt, at.motions, bodies);
@@ -627,26 +634,48 @@ fn advance(
         // Sequential impulses in one fixed order are lopsided (a box landing flat on a
         // soft cube was kicked sideways and kept swaying): the sweeps alternate.
         let backward = stats.substeps % 2 == 1;
-        stats.facet_contacts += sweep_contacts(
+        facets = sweep_contacts(
             body,
             (at, backward, sharing),
             bodies,
             sc,
-            (candidates, rows),
+            (candidates, rows, answers.then_some(&mut *fixed)),
         );
+        stats.facet_contacts += facets;
     });
-    let before = before?;
+    let mut before = before?;
     if together {
         return Some(before);
     }
     // An implicit integrator lets the rest of the body answer the contacts within the
     // step, then the contacts see the result.
+    let mut touched = Vec::new();
+    let alone = candidates.iter().all(|c| !c.dynamic) && body.bindings.len() == 0;
+    if alone && facets == 0 {
+        let x = &body.state.positions;
+        let state = (&x[..], &before[..], &body.rest.masses[..]);
+        if let Some(change) = contact::rigid_answer(state, fixed, at, candidates, bodies) {
+            for (v, p) in before.iter_mut().zip(x) {
+                *v += change.at(*p);
+            }
+            let v = &mut body.state.velocities;
+            v.copy_from_slice(&before);
+            touched = vec![false; v.len()];
+            for c in fixed.iter_mut() {
+                c.solve_afresh(v, at, candidates, bodies);
+                for (i, _) in c.moving_nodes() {
+                    touched[i] = true;
+                }
+            }
+        }
+    }
     let lift = lifts(&sc.touch, before.len());
     let carried = Carried::of(rows, body, candidates, at, bodies);
     let after = AfterContacts {
         before: &before,
         lift: &lift,
         carried: &carried.carried,
+        touched: &touched,
     };
     let set = body.state.velocities.clone();
     let mut reactions = Vec::new();
@@ -754,13 +783,15 @@ fn answered(m: &mut Member<'_, '_>, at: &Substep<'_>, bodies: &mut RigidBodySet,
         split: !m.shares_bodies,
         defer: false,
         explicit: false,
+        facet_slack: facet_slack(body, true),
     };
     let (stats, rows) = (&mut m.stats, &mut m.rigid_rows);
     timed(&mut m.times.contacts, || {
         let backward = stats.substeps % 2 == 1;
         rows.clear();
         let sweep = (at, backward, sharing);
-        stats.facet_contacts += sweep_contacts(body, sweep, bodies, sc, (candidates, rows));
+        let rows = (candidates, rows, None);
+        stats.facet_contacts += sweep_contacts(body, sweep, bodies, sc, rows);
     });
 }
 
@@ -887,14 +918,14 @@ fn sweep_contacts(
     sweep: (&Substep<'_>, bool, Sharing),
     bodies: &mut RigidBodySet,
     sc: &mut Scratch,
-    (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
+    (candidates, rows, fixed): ContactRows<'_, '_>,
 ) -> usize {
     node_contacts(
         body,
         sweep,
         bodies,
         (&sc.broad, &mut sc.touch),
-        (candidates, rows),
+        (candidates, rows, fixed),
     );
     facet_contacts(
         body,
@@ -915,6 +946,23 @@ const EXPLICIT_FACET_SLACK: Real = 1e-3;
 /// sank through the slab.
 const IMPLICIT_FACET_SLACK: Real = 0.05;
 
+/// The facet slack for `body` in a substep where the integrator answers its contacts or not:
+/// [`IMPLICIT_FACET_SLACK`] under the implicit step; in the explicit substeps of an impact
+/// between implicit steps [`EXPLICIT_FACET_SLACK`] plus as far as the feature crosses the
+/// facet's plane in the substep (the substep before may leave a facet a hair behind a heavy
+/// feature: a box's corner on a soft 2D slab under the midpoint step was lost by an impact's
+/// substeps and sank through); else [`EXPLICIT_FACET_SLACK`].
+fn facet_slack(body: &Deformable, answers: bool) -> FacetSlack {
+    let (slack, crossing) = if answers {
+        (IMPLICIT_FACET_SLACK, 0.0)
+    } else if body.step.midpoint.impact > 0.0 {
+        (EXPLICIT_FACET_SLACK, 1.0)
+    } else {
+        (EXPLICIT_FACET_SLACK, 0.0)
+    };
+    FacetSlack { slack, crossing }
+}
+
 /// How a member's contacts act on the dynamic bodies it pushes, and on its own cells.
 #[derive(Copy, Clone, Debug)]
 struct Sharing {
@@ -923,11 +971,22 @@ struct Sharing {
     split: bool,
     /// The body takes the contacts' impulses in its block solve ([`rigid_passes`]), not at once.
     defer: bool,
+    /// How far behind a facet a rigid feature may start a substep and still press it
+    /// ([`facet_slack`]).
+    facet_slack: FacetSlack,
     /// The velocities the contacts leave move the nodes as they are (the explicit step; an
     /// implicit one lets the body answer them first): a bounce is kept within the cells
     /// ([`bounce_within_cells`]).
     explicit: bool,
 }
+
+/// A member's candidates, where its contacts with dynamic bodies go, and where those with
+/// fixed and kinematic colliders go if they are kept.
+type ContactRows<'r, 'a> = (
+    &'r mut Candidates<'a>,
+    &'r mut Vec<Contact>,
+    Option<&'r mut Vec<Contact>>,
+);
 
 /// Every free surface node against its candidates; each contact found is solved at once.
 fn node_contacts(
@@ -935,7 +994,7 @@ fn node_contacts(
     (at, backward, sharing): (&Substep<'_>, bool, Sharing),
     bodies: &mut RigidBodySet,
     (broad, touch): (&Broad, &mut Touch),
-    (candidates, rows): (&mut Candidates<'_>, &mut Vec<Contact>),
+    (candidates, rows, mut fixed): ContactRows<'_, '_>,
 ) {
     let surface = body.rest.mesh.boundary_nodes();
     for j in 0..surface.len() {
@@ -1009,6 +1068,8 @@ fn node_contacts(
         touch.touched_colliders[c.candidate] = true;
         if candidates[c.candidate].dynamic {
             rows.push(c);
+        } else if let Some(fixed) = fixed.as_mut() {
+            fixed.push(c);
         }
     }
 }
@@ -1151,11 +1212,7 @@ fn facet_contacts(
                 inv_masses,
             };
             let ids = &broad.facet_cands[b0..b1];
-            let slack = if sharing.explicit {
-                EXPLICIT_FACET_SLACK
-            } else {
-                IMPLICIT_FACET_SLACK
-            };
+            let slack = sharing.facet_slack;
             let Some(mut c) = contact::resolve_facet(&motion, (at, slack), ids, candidates, bodies)
             else {
                 break;
