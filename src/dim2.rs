@@ -149,14 +149,18 @@ pub mod math {
         }
     }
 
+    /// The polar moment of inertia `Σ m |r|²` of masses `m` at offsets `r`.
+    fn polar_inertia(r: &[Vector], m: &[Real]) -> Real {
+        r.iter()
+            .zip(m)
+            .map(|(ri, mi)| mi * ri.length_squared())
+            .sum()
+    }
+
     /// The inverse inertia `1 / Σ m |r|²` of masses `m` at offsets `r` (from their centre of
     /// mass); zero when they all sit at the centre.
     pub fn inverse_inertia(r: &[Vector], m: &[Real]) -> AngMatrix {
-        let i: Real = r
-            .iter()
-            .zip(m)
-            .map(|(ri, mi)| mi * ri.length_squared())
-            .sum();
+        let i = polar_inertia(r, m);
         if i <= Real::MIN_POSITIVE {
             0.0
         } else {
@@ -167,7 +171,12 @@ pub mod math {
     /// The angular velocity `ω` that gives masses `m` at offsets `r` (from their centre of
     /// mass) the angular momentum `l`: `ω = l / Σ m |r|²`.
     pub fn angular_velocity_for(r: &[Vector], m: &[Real], l: AngVector) -> AngVector {
-        inverse_inertia(r, m) * l
+        let i = polar_inertia(r, m);
+        if i <= Real::MIN_POSITIVE {
+            0.0
+        } else {
+            l / i
+        }
     }
 
     /// The rigid turn of masses `m` at offsets `r` (from their centre of mass) with angular
