@@ -12,7 +12,8 @@
 //!
 //! The sweeps start from `x₀ + h v₀`, inertia without gravity: a resting body starts where it
 //! rests, the minimiser. (Starting from `y`, the few sweeps could not lift the body back up by
-//! `h² g` each step, and it rested 3 % low at 3 sweeps.) A body with no held node then moves
+//! `h² g` each step, and it rested 3 % low at 3 sweeps.) Held nodes or a body that rings may
+//! start elsewhere ([`start_scaled`], [`start_rigid`]). A body with no held node then moves
 //! as a whole by the best translation, which is exact because the energy does not change under
 //! one: `Σ m (y − x) / Σ m`. Gauss–Seidel hardly moves a body much stiffer than `m/h²` as a
 //! whole; with this its free flight is ballistic whatever the sweeps.
@@ -461,6 +462,8 @@ impl ModelState {
                 x.extend((0..n).map(|i| held[i].start(ahead[i], x0[i])));
                 if held.iter().any(|h| *h != Hold::Free) {
                     start_scaled(elements, volume, input, (&held, &y), x);
+                } else {
+                    start_rigid(elements, volume, input, &y, x);
                 }
             }
         }
@@ -809,6 +812,69 @@ fn start_scaled(
     }
     for (&i, m) in free.iter().zip(&motion) {
         x[i] = x0[i] + *m * best;
+    }
+}
+
+/// Share of a free body's kinetic energy about its centre of mass in motion relative to its
+/// rigid motion above which [`start_rigid`] weighs the rigid start.
+const RINGING: Real = 0.01;
+
+/// Moves a free body's start `x` (at its motion carried ahead) to its rigid motion carried
+/// ahead instead, if the body rings (more than [`RINGING`] of its kinetic energy about its
+/// centre relative to its rigid motion) and that start has the lesser incremental potential:
+/// the stiff modes a step cannot resolve carried `h v₀` ahead flatten cells (a silicone
+/// ball's first implicit step after an impact's explicit substeps started 2 cm cells a
+/// centimetre out of shape), and a few sweeps leave most of that stored.
+fn start_rigid(
+    elements: &Elements,
+    volume: Option<&Volume>,
+    input: &StepInput<'_>,
+    y: &[Vector],
+    x: &mut [Vector],
+) {
+    let (x0, v0, h, masses) = (input.x0, input.v0, input.h, input.masses);
+    let mass: Real = masses.iter().sum();
+    if mass.is_nan() || mass <= 0.0 {
+        return;
+    }
+    let centre = x0.iter().zip(masses).map(|(p, m)| *p * *m).sum::<Vector>() / mass;
+    let velocity = v0.iter().zip(masses).map(|(v, m)| *v * *m).sum::<Vector>() / mass;
+    let r: Vec<Vector> = x0.iter().map(|p| *p - centre).collect();
+    let momentum = r
+        .iter()
+        .zip(v0)
+        .zip(masses)
+        .map(|((r, v), m)| math::cross(*r, (*v - velocity) * *m))
+        .fold(math::ANG_ZERO, |a, b| a + b);
+    let omega = math::angular_velocity_for(&r, masses, momentum);
+    let rigid: Vec<Vector> = r
+        .iter()
+        .map(|r| velocity + math::ang_cross(omega, *r))
+        .collect();
+    let (mut about, mut relative) = (0.0, 0.0);
+    for ((v, w), m) in v0.iter().zip(&rigid).zip(masses) {
+        about += m * (*v - velocity).length_squared();
+        relative += m * (*v - *w).length_squared();
+    }
+    if relative.partial_cmp(&(RINGING * about)) != Some(std::cmp::Ordering::Greater) {
+        return;
+    }
+    let ahead = if input.chords {
+        carried_ahead(x0, &rigid, masses, h)
+    } else {
+        x0.iter().zip(&rigid).map(|(x, v)| *x + *v * h).collect()
+    };
+    let objective = |x: &[Vector]| -> Real {
+        let inertia: Real = x
+            .iter()
+            .zip(y)
+            .zip(masses)
+            .map(|((x, y), m)| m * (*x - *y).length_squared())
+            .sum();
+        inertia * (0.5 / (h * h)) + super::elastic_energy(elements, volume, x)
+    };
+    if objective(&ahead) < objective(x) {
+        x.copy_from_slice(&ahead);
     }
 }
 
