@@ -756,14 +756,66 @@ fn a_cube_slid_along_the_floor_stops_without_tipping_over_under_the_implicit_ste
 }
 
 #[test]
+fn a_ball_thrown_sliding_along_the_floor_rolls_under_the_implicit_steps() {
+    // A ball thrown sliding at v along a floor (μ = 0.5): friction slows it and spins it up
+    // until it rolls, at 5/7 v (a disc at 2/3 v), in 0.1 s here. Taken as a rigid faceted body
+    // its flat bottom (a voxel ball's is half its width) stood on its leading edge like a cube's,
+    // and the ball slid to a stop and drifted back; the explicit step's soft contacts roll it
+    // through its deformation (1.14-1.34 m/s at 1 s, 3D). Now 1.10-1.16 m/s (3D), 0.99-1.13
+    // (2D): the soft ball's rolling resistance.
+    let v = 2.0;
+    let rolling = if DIM == 3 { 5.0 / 7.0 } else { 2.0 / 3.0 } * v;
+    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
+        for integrator in [
+            Integrator::Implicit { iterations: 2 },
+            Integrator::Midpoint { iterations: 2 },
+        ] {
+            let mut world = DeformableWorld::new();
+            world.set_dt(1.0 / 60.0);
+            world.pipeline.settings.integrator = integrator;
+            ground(&mut world, 0.5, 0.0);
+            let ball = Mesh::from_shape(&Ball::new(0.1), 0.025, CellKind::Simplex).unwrap();
+            let body = DeformableBuilder::new(ball)
+                .model(model)
+                .material(Material {
+                    density: 400.0,
+                    young_modulus: 1e5,
+                    damping_ratio: 0.3,
+                    ..Default::default()
+                })
+                .friction(0.5)
+                .translation(UP * 0.1)
+                .linvel(Vector::X * v)
+                .build()
+                .unwrap();
+            let h = world.insert(body);
+            let mut slowest = v;
+            for _ in 0..60 {
+                world.step();
+                slowest = slowest.min(world.deformables[h].center_of_mass_velocity()[0]);
+            }
+            let speed = world.deformables[h].center_of_mass_velocity()[0];
+            let name = format!("{model:?} {integrator:?}");
+            eprintln!(
+                "{name}: {speed:.3} m/s after 1 s, slowest {slowest:.3} (rolling: {rolling:.3})"
+            );
+            assert!(
+                (0.65 * rolling..1.02 * rolling).contains(&speed),
+                "{name}: {speed} m/s after 1 s, rolling at {rolling}"
+            );
+            assert!(slowest > 0.6 * rolling, "{name}: slowed to {slowest} m/s");
+        }
+    }
+}
+
+#[test]
 fn a_cube_slides_and_a_ball_rolls_down_a_ramp_under_the_implicit_steps() {
     // On a 30° ramp, in 0.5 s: a cube on ice slides at g sin 30°, 0.61 m (its base nodes held
     // where the contacts stopped them, it slid at a quarter to two fifths of that). A rigid ball
     // that friction (0.8) holds on rolls at 5/7 g sin 30° (a disc at 2/3), 0.41 m (0.44 m);
     // its contact nodes held, the implicit steps' ball could not turn over them and stood
-    // (3 mm). Its rigid motion answering the contacts first it rolls, at about a third of that:
-    // a faceted ball's nodes land one by one, each stopped (the explicit step at 1 ms, whose
-    // contacts are soft: 70-90 %).
+    // (3 mm); taken as a rigid faceted body, it turned over its flat bottom's edge at a third
+    // of that pace. Now 91-94 % (the explicit step at 1 ms, whose contacts are soft: 70-90 %).
     let slope = Real::to_radians(30.0);
     let seconds = 0.5;
     let along = 0.5 * 9.81 * slope.sin() * seconds * seconds;
@@ -788,7 +840,7 @@ fn a_cube_slides_and_a_ball_rolls_down_a_ramp_under_the_implicit_steps() {
                 "{name}: slid {slid} m, {along} m on ice"
             );
             assert!(
-                (0.25 * rolling * along..1.02 * rolling * along).contains(&rolled),
+                (0.7 * rolling * along..1.02 * rolling * along).contains(&rolled),
                 "{name}: rolled {rolled} m, a rigid ball {} m",
                 rolling * along
             );

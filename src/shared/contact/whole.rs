@@ -7,7 +7,9 @@
 //! take the contacts' impulses first, as a rigid body's would, by projected Gauss–Seidel over
 //! the rows with Coulomb's cone, and every node takes the change of that rigid motion. A rigid
 //! motion does not change the elastic energy: the sweeps then start where a stiff body goes,
-//! with nothing stored.
+//! with nothing stored. Not quite a rigid body's answer: a contact patch narrower than the body
+//! takes its normal impulses at a shortened lever ([`normal_lever`]), so that a coarse ball
+//! rolls over its flat facets as a soft one does.
 
 use super::super::coupling::Substep;
 use super::super::math::{self, AngMatrix, AngVector, Real, Vector};
@@ -41,6 +43,8 @@ impl RigidChange {
 struct Row {
     /// Lever arm from the centre of mass.
     arm: Vector,
+    /// The lever arm of the normal impulse ([`normal_lever`]).
+    lever: Vector,
     normal: Vector,
     /// Normal velocity relative to the collider to reach, and the collider's velocity there.
     target: Real,
@@ -78,10 +82,12 @@ impl Rigid {
 /// The change of the rigid motion of a body (nodes at `x`, velocities `v`, masses `masses`)
 /// that answers its contact `rows` (each with a fixed or kinematic collider) as a rigid body
 /// would: each row's normal impulse non-negative and reaching its target normal velocity, its
-/// friction in Coulomb's cone. `None` without rows or mass.
+/// friction in Coulomb's cone. A row whose collider the body's centre closes on faster than
+/// `impact` takes the blow at its whole lever arm, the others at [`normal_lever`]'s. `None`
+/// without rows or mass.
 pub(crate) fn rigid_answer(
     (x, v, masses): (&[Vector], &[Vector], &[Real]),
-    rows: &[Contact],
+    (rows, impact): (&[Contact], Real),
     at: &Substep<'_>,
     candidates: &[Candidate<'_>],
     bodies: &RigidBodySet,
@@ -108,12 +114,20 @@ pub(crate) fn rigid_answer(
         .iter()
         .map(|c| {
             let cand = &candidates[c.candidate];
+            let arm = c.node_point(x) - centre;
+            let collider =
+                cand.anchored_velocity(c.point, c.anchor, at.s1, at.dt, at.motions, bodies);
+            let blow = (collider - linear).dot(c.normal) > impact;
             Row {
-                arm: c.node_point(x) - centre,
+                arm,
+                lever: if blow {
+                    arm
+                } else {
+                    normal_lever(arm, c.normal, &arms)
+                },
                 normal: c.normal,
                 target: c.target,
-                collider: cand
-                    .anchored_velocity(c.point, c.anchor, at.s1, at.dt, at.motions, bodies),
+                collider,
                 friction: cand.friction,
                 normal_impulse: 0.0,
                 friction_impulse: Vector::ZERO,
@@ -126,12 +140,12 @@ pub(crate) fn rigid_answer(
         let mut change: Real = 0.0;
         for row in rows.iter_mut() {
             let n = row.normal;
-            let k = body.inv_mass_at(row.arm, n);
-            let vn = (body.velocity(row.arm) - row.collider).dot(n);
+            let k = body.inv_mass_at(row.lever, n);
+            let vn = (body.velocity(row.lever) - row.collider).dot(n);
             let total = (row.normal_impulse + (row.target - vn) / k).max(0.0);
             let dj = total - row.normal_impulse;
             row.normal_impulse = total;
-            body.apply(row.arm, n * dj);
+            body.apply(row.lever, n * dj);
             change = change.max(dj.abs());
             if row.friction <= 0.0 {
                 continue;
@@ -161,4 +175,25 @@ pub(crate) fn rigid_answer(
         angular: body.angular - angular0,
     };
     (change.linear.is_finite() && math::ang_norm(change.angular).is_finite()).then_some(change)
+}
+
+/// The lever arm at which a contact at `arm` (from the centre of mass) with normal `n` takes
+/// its normal impulse: its part along `n` whole, its part across `n` shortened by the square
+/// of how far across the body it reaches, `(reach / extent)²`, `extent` being the body's
+/// (nodes at `arms`) in that direction. A flat face the body rests on reaches its edge and
+/// keeps its whole lever (a cube pushed along a floor leans on its leading edge and does
+/// not tip); a patch narrower than the body (a ball's) keeps a short one, so the body rolls
+/// over it by deforming as the explicit step's soft contacts roll it, instead of standing on
+/// a coarse mesh's flat facets as a rigid polyhedron would.
+fn normal_lever(arm: Vector, n: Vector, arms: &[Vector]) -> Vector {
+    let along = n * arm.dot(n);
+    let across = arm - along;
+    let reach = across.length();
+    if reach <= 0.0 {
+        return arm;
+    }
+    let d = across / reach;
+    let extent = arms.iter().map(|a| a.dot(d)).fold(reach, Real::max);
+    let share = reach / extent;
+    along + across * (share * share)
 }

@@ -654,7 +654,11 @@ fn advance(
     if alone && facets == 0 {
         let x = &body.state.positions;
         let state = (&x[..], &before[..], &body.rest.masses[..]);
-        if let Some(change) = contact::rigid_answer(state, fixed, at, candidates, bodies) {
+        // Closing faster than gravity brings in two substeps (and the restitution threshold):
+        // an impact, as `pipeline/impact.rs` tells one.
+        let impact = at.restitution_threshold + 2.0 * g.length() * at.h;
+        let rows = (&fixed[..], impact);
+        if let Some(change) = contact::rigid_answer(state, rows, at, candidates, bodies) {
             for (v, p) in before.iter_mut().zip(x) {
                 *v += change.at(*p);
             }
