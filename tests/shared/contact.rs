@@ -6,8 +6,8 @@ use crate::dim::math::{self, Real, Vector, DIM, UP};
 use crate::dim::rapier::geometry::{Ball, Cuboid, SharedShape};
 use crate::dim::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
 use crate::dim::{
-    CellKind, ChannelEventCollector, DeformableBuilder, DeformableContactEvent, DeformableWorld,
-    ElementModel, Integrator, Material, Mesh,
+    CellKind, ChannelEventCollector, DeformableBuilder, DeformableContactEvent, DeformableHandle,
+    DeformableWorld, ElementModel, Integrator, Material, Mesh,
 };
 
 fn cuboid(half: Vector) -> ColliderBuilder {
@@ -714,25 +714,8 @@ fn a_cube_slid_along_the_floor_stops_without_tipping_over_under_the_implicit_ste
             Integrator::Implicit { iterations: 2 },
             Integrator::Midpoint { iterations: 2 },
         ] {
-            let mut world = DeformableWorld::new();
-            world.set_dt(1.0 / 60.0);
-            world.pipeline.settings.integrator = integrator;
-            ground(&mut world, 0.5, 0.0);
             let cube = Mesh::cuboid(Vector::splat(0.1), [4; DIM], CellKind::Simplex).unwrap();
-            let body = DeformableBuilder::new(cube)
-                .model(model)
-                .material(Material {
-                    density: 400.0,
-                    young_modulus: 1e5,
-                    damping_ratio: 0.3,
-                    ..Default::default()
-                })
-                .friction(0.5)
-                .translation(UP * 0.101)
-                .linvel(Vector::X * 3.0)
-                .build()
-                .unwrap();
-            let h = world.insert(body);
+            let (mut world, h) = slid_along_the_floor(cube, 0.101, (model, integrator), 3.0);
             let mut highest: Real = 0.0;
             for _ in 0..120 {
                 world.step();
@@ -770,25 +753,8 @@ fn a_ball_thrown_sliding_along_the_floor_rolls_under_the_implicit_steps() {
             Integrator::Implicit { iterations: 2 },
             Integrator::Midpoint { iterations: 2 },
         ] {
-            let mut world = DeformableWorld::new();
-            world.set_dt(1.0 / 60.0);
-            world.pipeline.settings.integrator = integrator;
-            ground(&mut world, 0.5, 0.0);
             let ball = Mesh::from_shape(&Ball::new(0.1), 0.025, CellKind::Simplex).unwrap();
-            let body = DeformableBuilder::new(ball)
-                .model(model)
-                .material(Material {
-                    density: 400.0,
-                    young_modulus: 1e5,
-                    damping_ratio: 0.3,
-                    ..Default::default()
-                })
-                .friction(0.5)
-                .translation(UP * 0.1)
-                .linvel(Vector::X * v)
-                .build()
-                .unwrap();
-            let h = world.insert(body);
+            let (mut world, h) = slid_along_the_floor(ball, 0.1, (model, integrator), v);
             let mut slowest = v;
             for _ in 0..60 {
                 world.step();
@@ -806,6 +772,35 @@ fn a_ball_thrown_sliding_along_the_floor_rolls_under_the_implicit_steps() {
             assert!(slowest > 0.6 * rolling, "{name}: slowed to {slowest} m/s");
         }
     }
+}
+
+/// A world at 60 Hz with a floor (friction 0.5) and `mesh` (400 kg/m³, E = 10⁵ Pa, ζ = 0.3,
+/// friction 0.5) on it, its centre `height` up, thrown along the floor at `speed`.
+fn slid_along_the_floor(
+    mesh: Mesh,
+    height: Real,
+    (model, integrator): (ElementModel, Integrator),
+    speed: Real,
+) -> (DeformableWorld, DeformableHandle) {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    world.pipeline.settings.integrator = integrator;
+    ground(&mut world, 0.5, 0.0);
+    let body = DeformableBuilder::new(mesh)
+        .model(model)
+        .material(Material {
+            density: 400.0,
+            young_modulus: 1e5,
+            damping_ratio: 0.3,
+            ..Default::default()
+        })
+        .friction(0.5)
+        .translation(UP * height)
+        .linvel(Vector::X * speed)
+        .build()
+        .unwrap();
+    let h = world.insert(body);
+    (world, h)
 }
 
 #[test]

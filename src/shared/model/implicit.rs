@@ -61,7 +61,7 @@ mod global;
 
 use std::ops::Range;
 
-use super::super::math::{self, Matrix, Real, Rotation, Vector, SIMPLEX_ARITY};
+use super::super::math::{self, AngVector, Matrix, Real, Rotation, Vector, SIMPLEX_ARITY};
 use super::super::threads;
 use super::edge_repulsion::EdgeRepulsion;
 use super::hessian;
@@ -726,6 +726,38 @@ impl Solve<'_> {
     }
 }
 
+/// A body's motion about its centre of mass: the centre's velocity, each node's offset from
+/// the centre, and the angular momentum about it.
+struct Motion {
+    velocity: Vector,
+    r: Vec<Vector>,
+    momentum: AngVector,
+}
+
+impl Motion {
+    /// Of nodes at `x0` moving at `v0`; `None` without mass.
+    fn of(x0: &[Vector], v0: &[Vector], masses: &[Real]) -> Option<Self> {
+        let mass: Real = masses.iter().sum();
+        if mass.is_nan() || mass <= 0.0 {
+            return None;
+        }
+        let centre = x0.iter().zip(masses).map(|(p, m)| *p * *m).sum::<Vector>() / mass;
+        let velocity = v0.iter().zip(masses).map(|(v, m)| *v * *m).sum::<Vector>() / mass;
+        let r: Vec<Vector> = x0.iter().map(|p| *p - centre).collect();
+        let momentum = r
+            .iter()
+            .zip(v0)
+            .zip(masses)
+            .map(|((r, v), m)| math::cross(*r, (*v - velocity) * *m))
+            .fold(math::ANG_ZERO, |a, b| a + b);
+        Some(Motion {
+            velocity,
+            r,
+            momentum,
+        })
+    }
+}
+
 /// Where each node's motion carries it over a step of length `h` without forces: `x₀ + h v₀`
 /// plus the part of the body's rigid turn that a straight line misses, its centripetal and
 /// Euler accelerations `ω × (ω × r) + α × r` (`r` the node's offset from the centre of mass,
@@ -737,19 +769,9 @@ impl Solve<'_> {
 /// at 60 Hz with two sweeps. With it a rigid turn carries on.
 fn carried_ahead(x0: &[Vector], v0: &[Vector], masses: &[Real], h: Real) -> Vec<Vector> {
     let mut ahead: Vec<Vector> = x0.iter().zip(v0).map(|(x, v)| *x + *v * h).collect();
-    let mass: Real = masses.iter().sum();
-    if mass.is_nan() || mass <= 0.0 {
+    let Some(Motion { r, momentum, .. }) = Motion::of(x0, v0, masses) else {
         return ahead;
-    }
-    let centre = x0.iter().zip(masses).map(|(p, m)| *p * *m).sum::<Vector>() / mass;
-    let velocity = v0.iter().zip(masses).map(|(v, m)| *v * *m).sum::<Vector>() / mass;
-    let r: Vec<Vector> = x0.iter().map(|p| *p - centre).collect();
-    let momentum = r
-        .iter()
-        .zip(v0)
-        .zip(masses)
-        .map(|((r, v), m)| math::cross(*r, (*v - velocity) * *m))
-        .fold(math::ANG_ZERO, |a, b| a + b);
+    };
     let (omega, alpha) = math::torque_free_turn(&r, masses, momentum);
     let spin = math::ang_dot(omega, omega);
     let sine = (spin.sqrt() * h).min(0.5);
@@ -833,19 +855,14 @@ fn start_rigid(
     x: &mut [Vector],
 ) {
     let (x0, v0, h, masses) = (input.x0, input.v0, input.h, input.masses);
-    let mass: Real = masses.iter().sum();
-    if mass.is_nan() || mass <= 0.0 {
+    let Some(Motion {
+        velocity,
+        r,
+        momentum,
+    }) = Motion::of(x0, v0, masses)
+    else {
         return;
-    }
-    let centre = x0.iter().zip(masses).map(|(p, m)| *p * *m).sum::<Vector>() / mass;
-    let velocity = v0.iter().zip(masses).map(|(v, m)| *v * *m).sum::<Vector>() / mass;
-    let r: Vec<Vector> = x0.iter().map(|p| *p - centre).collect();
-    let momentum = r
-        .iter()
-        .zip(v0)
-        .zip(masses)
-        .map(|((r, v), m)| math::cross(*r, (*v - velocity) * *m))
-        .fold(math::ANG_ZERO, |a, b| a + b);
+    };
     let omega = math::angular_velocity_for(&r, masses, momentum);
     let rigid: Vec<Vector> = r
         .iter()
