@@ -793,10 +793,58 @@ fn answered(m: &mut Member<'_, '_>, at: &Substep<'_>, bodies: &mut RigidBodySet,
     timed(&mut m.times.contacts, || {
         let backward = stats.substeps % 2 == 1;
         rows.clear();
+        let solved = body.state.velocities.clone();
         let sweep = (at, backward, sharing);
         let rows = (candidates, rows, None);
         stats.facet_contacts += sweep_contacts(body, sweep, bodies, sc, rows);
+        keep_motion_upright(body, &solved, at.h);
     });
+}
+
+/// Scales back the velocity changes the contacts made after an implicit solve (from `solved`)
+/// node by node, halving each up to ten times (else undoing it), until carried over `h` it
+/// leaves every cell of its node at [`MIN_OUT_QUALITY`] or no flatter than the solve's motion
+/// would: the solve kept the cells upright, and a box corner pressing a shape-matched ball's
+/// facet pushed the facet's nodes through the cells behind it, step after step, until cells
+/// turned inside out. A node held back so is a hair inside the collider, and the next step's
+/// contacts take it out over that step.
+fn keep_motion_upright(body: &mut Deformable, solved: &[Vector], h: Real) {
+    let (x, v) = (&body.state.positions, &mut body.state.velocities);
+    let (mesh, near) = (&body.rest.mesh, body.rest.near_facets());
+    let mut end: Vec<Vector> = x.iter().zip(solved).map(|(p, u)| *p + *u * h).collect();
+    let floors = |end: &[Vector], cells: &[u32]| -> Vec<Real> {
+        cells
+            .iter()
+            .map(|&c| MIN_OUT_QUALITY.min(mesh.cell_quality(c as usize, end)))
+            .collect()
+    };
+    for (k, &i) in mesh.boundary_nodes().iter().enumerate() {
+        let i = i as usize;
+        let change = v[i] - solved[i];
+        if change == Vector::ZERO {
+            continue;
+        }
+        let cells = near.cells_of_node(k);
+        let floor = floors(&end, cells);
+        let mut scale = 1.0;
+        let mut upright = false;
+        for _ in 0..=10 {
+            end[i] = x[i] + (solved[i] + change * scale) * h;
+            upright = cells
+                .iter()
+                .zip(&floor)
+                .all(|(&c, &f)| mesh.cell_quality(c as usize, &end) >= f);
+            if upright {
+                break;
+            }
+            scale *= 0.5;
+        }
+        if !upright {
+            scale = 0.0;
+            end[i] = x[i] + solved[i] * h;
+        }
+        v[i] = solved[i] + change * scale;
+    }
 }
 
 /// What an implicit step's holds gave the nodes the contacts stopped.
