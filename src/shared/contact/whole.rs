@@ -86,7 +86,7 @@ impl Rigid {
 /// `impact` takes the blow at its whole lever arm, the others at [`normal_lever`]'s. `None`
 /// without rows or mass.
 pub(crate) fn rigid_answer(
-    (x, v, masses): (&[Vector], &[Vector], &[Real]),
+    (x, v, masses, surface): (&[Vector], &[Vector], &[Real], &[u32]),
     (rows, impact): (&[Contact], Real),
     at: &Substep<'_>,
     candidates: &[Candidate<'_>],
@@ -104,6 +104,8 @@ pub(crate) fn rigid_answer(
         momentum += math::cross(*r, *u - linear) * *m;
     }
     let inv_inertia = math::inverse_inertia(&arms, masses);
+    // The body's extent in any direction is its surface's.
+    let outline: Vec<Vector> = surface.iter().map(|&i| arms[i as usize]).collect();
     let start = Rigid {
         inv_mass: 1.0 / mass,
         inv_inertia,
@@ -123,7 +125,7 @@ pub(crate) fn rigid_answer(
                 lever: if blow {
                     arm
                 } else {
-                    normal_lever(arm, c.normal, &arms)
+                    normal_lever(arm, c.normal, &outline)
                 },
                 normal: c.normal,
                 target: c.target,
@@ -180,7 +182,7 @@ pub(crate) fn rigid_answer(
 /// The lever arm at which a contact at `arm` (from the centre of mass) with normal `n` takes
 /// its normal impulse: its part along `n` whole, its part across `n` shortened by the square
 /// of how far across the body it reaches, `(reach / extent)²`, `extent` being the body's
-/// (nodes at `arms`) in that direction. A flat face the body rests on reaches its edge and
+/// (its surface nodes at `arms`) in that direction. A flat face the body rests on reaches its edge and
 /// keeps its whole lever (a cube pushed along a floor leans on its leading edge and does
 /// not tip); a patch narrower than the body (a ball's) keeps a short one, so the body rolls
 /// over it by deforming as the explicit step's soft contacts roll it, instead of standing on

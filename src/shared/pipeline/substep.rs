@@ -653,7 +653,8 @@ fn advance(
     let alone = candidates.iter().all(|c| !c.dynamic) && body.bindings.len() == 0;
     if alone && facets == 0 {
         let x = &body.state.positions;
-        let state = (&x[..], &before[..], &body.rest.masses[..]);
+        let surface = body.rest.mesh.boundary_nodes();
+        let state = (&x[..], &before[..], &body.rest.masses[..], surface);
         // Closing faster than gravity brings in two substeps (and the restitution threshold):
         // an impact, as `pipeline/impact.rs` tells one.
         let impact = at.restitution_threshold + 2.0 * g.length() * at.h;
