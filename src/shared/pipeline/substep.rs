@@ -810,6 +810,9 @@ fn answered(m: &mut Member<'_, '_>, at: &Substep<'_>, bodies: &mut RigidBodySet,
 /// turned inside out. A node held back so is a hair inside the collider, and the next step's
 /// contacts take it out over that step.
 fn keep_motion_upright(body: &mut Deformable, solved: &[Vector], h: Real) {
+    if body.state.velocities[..] == solved[..] {
+        return;
+    }
     let (x, v) = (&body.state.positions, &mut body.state.velocities);
     let (mesh, near) = (&body.rest.mesh, body.rest.near_facets());
     let mut end: Vec<Vector> = x.iter().zip(solved).map(|(p, u)| *p + *u * h).collect();
