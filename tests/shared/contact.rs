@@ -490,42 +490,58 @@ fn a_light_box_dropped_on_a_soft_slab_rests_on_it() {
     assert_rests("light box", &o);
 }
 
+/// The soft bodies slid and rolled on floors and ramps: 400 kg/m³, E = 10⁵ Pa, ζ = 0.3.
+const SOFT_FOAM: Material = Material {
+    density: 400.0,
+    young_modulus: 1e5,
+    poisson_ratio: 0.3,
+    damping_ratio: 0.3,
+};
+
+/// Edge repulsion and shape matching, each under backward Euler and the midpoint step
+/// (2 sweeps).
+fn implicit_runs() -> impl Iterator<Item = (ElementModel, Integrator)> {
+    [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING]
+        .into_iter()
+        .flat_map(|model| {
+            [
+                Integrator::Implicit { iterations: 2 },
+                Integrator::Midpoint { iterations: 2 },
+            ]
+            .map(|integrator| (model, integrator))
+        })
+}
+
 #[test]
 fn boxes_dropped_on_a_soft_slab_are_held_up_under_the_implicit_steps() {
     // The implicit step held the nodes a box pressed where the box went and passed what
     // holding them took on to the box, as if it could not yield: a 0.08 kg box landing on
     // 1 kg nodes was launched at 28 m/s, and boxes up to 8 kg and balls flew off (km high from
     // the stiff slab). Now each node carries its share of the box.
-    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
-        for integrator in [
-            Integrator::Implicit { iterations: 2 },
-            Integrator::Midpoint { iterations: 2 },
-        ] {
-            for young_modulus in [5e4, 1e6] {
-                // Shape matching lets the 2D box of 1000 kg/m³ sink half way into the soft
-                // slab (its cells flatten under a load edge repulsion's barriers hold).
-                let heavy = model == ElementModel::EdgeRepulsion || young_modulus > 1e5;
-                let densities: &[Real] = if heavy {
-                    &[10.0, 100.0, 1000.0]
-                } else {
-                    &[10.0, 100.0]
-                };
-                for &density in densities {
-                    let body = cuboid(Vector::splat(0.1)).density(density);
-                    let o = drop_on_slab(body, young_modulus, (model, integrator));
-                    let name = format!(
-                        "{density} kg/m³ box on {young_modulus} Pa, {model:?}, {integrator:?}"
-                    );
-                    assert_held_up(&name, &o);
-                    // Not asleep: the unconverged reactions keep it creeping (up to 1.5 cm in
-                    // the last second; the explicit step puts it to sleep).
-                    assert!(o.moved < 0.02, "{name}: moving: {o:?}");
-                }
-                let ball = ColliderBuilder::ball(0.1).density(100.0);
-                let o = drop_on_slab(ball, young_modulus, (model, integrator));
-                let name = format!("ball on {young_modulus} Pa, {model:?}, {integrator:?}");
+    for (model, integrator) in implicit_runs() {
+        for young_modulus in [5e4, 1e6] {
+            // Shape matching lets the 2D box of 1000 kg/m³ sink half way into the soft
+            // slab (its cells flatten under a load edge repulsion's barriers hold).
+            let heavy = model == ElementModel::EdgeRepulsion || young_modulus > 1e5;
+            let densities: &[Real] = if heavy {
+                &[10.0, 100.0, 1000.0]
+            } else {
+                &[10.0, 100.0]
+            };
+            for &density in densities {
+                let body = cuboid(Vector::splat(0.1)).density(density);
+                let o = drop_on_slab(body, young_modulus, (model, integrator));
+                let name =
+                    format!("{density} kg/m³ box on {young_modulus} Pa, {model:?}, {integrator:?}");
                 assert_held_up(&name, &o);
+                // Not asleep: the unconverged reactions keep it creeping (up to 1.5 cm in
+                // the last second; the explicit step puts it to sleep).
+                assert!(o.moved < 0.02, "{name}: moving: {o:?}");
             }
+            let ball = ColliderBuilder::ball(0.1).density(100.0);
+            let o = drop_on_slab(ball, young_modulus, (model, integrator));
+            let name = format!("ball on {young_modulus} Pa, {model:?}, {integrator:?}");
+            assert_held_up(&name, &o);
         }
     }
 }
@@ -665,12 +681,7 @@ fn on_a_ramp(
         .fold(Real::INFINITY, Real::min);
     let body = DeformableBuilder::new(mesh)
         .model(model)
-        .material(Material {
-            density: 400.0,
-            young_modulus: 1e5,
-            damping_ratio: 0.3,
-            ..Default::default()
-        })
+        .material(SOFT_FOAM)
         .friction(friction)
         .restitution(0.0)
         .rotation(rotation)
@@ -691,17 +702,12 @@ fn a_cube_stays_on_a_ramp_its_friction_holds_it_on_under_the_implicit_steps() {
     // set on a 30° ramp stays where it is: the contacts that hold its nodes where they were set
     // must not let it creep down.
     let slope = Real::to_radians(30.0);
-    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
-        for integrator in [
-            Integrator::Implicit { iterations: 2 },
-            Integrator::Midpoint { iterations: 2 },
-        ] {
-            let cube = Mesh::cuboid(Vector::splat(0.1), [4; DIM], CellKind::Simplex).unwrap();
-            let moved = on_a_ramp(cube, model, integrator, (-slope, 0.8, 2.0));
-            let name = format!("{model:?} {integrator:?}");
-            eprintln!("{name}: cube moved {moved:.4} m");
-            assert!(moved < 0.01, "{name}: moved {moved} m");
-        }
+    for (model, integrator) in implicit_runs() {
+        let cube = Mesh::cuboid(Vector::splat(0.1), [4; DIM], CellKind::Simplex).unwrap();
+        let moved = on_a_ramp(cube, model, integrator, (-slope, 0.8, 2.0));
+        let name = format!("{model:?} {integrator:?}");
+        eprintln!("{name}: cube moved {moved:.4} m");
+        assert!(moved < 0.01, "{name}: moved {moved} m");
     }
 }
 
@@ -709,32 +715,27 @@ fn a_cube_stays_on_a_ramp_its_friction_holds_it_on_under_the_implicit_steps() {
 fn a_cube_slid_along_the_floor_stops_without_tipping_over_under_the_implicit_steps() {
     // Friction stops a sliding cube's base node by node; the bulk, still moving, must not
     // turn the cube over its leading edge (it needs μ > 1 to tip a cube).
-    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
-        for integrator in [
-            Integrator::Implicit { iterations: 2 },
-            Integrator::Midpoint { iterations: 2 },
-        ] {
-            let cube = Mesh::cuboid(Vector::splat(0.1), [4; DIM], CellKind::Simplex).unwrap();
-            let (mut world, h) = slid_along_the_floor(cube, 0.101, (model, integrator), 3.0);
-            let mut highest: Real = 0.0;
-            for _ in 0..120 {
-                world.step();
-                highest = highest.max(world.deformables[h].center_of_mass().dot(UP));
-            }
-            let b = &world.deformables[h];
-            let name = format!("{model:?} {integrator:?}");
-            let (speed, travelled) = (b.center_of_mass_velocity().length(), b.center_of_mass()[0]);
-            eprintln!("{name}: slid {travelled:.3} m, highest {highest:.4} m, speed {speed:.3}");
-            // Tipped onto its edge its centre would be at 0.141 m.
-            assert!(highest < 0.11, "{name}: its centre rose to {highest} m");
-            assert!(speed < 0.05, "{name}: still moving at {speed} m/s");
-            // Coulomb's μ g stops it in 3²/(2 · 0.5 · 9.81) = 0.92 m (the explicit step: 0.915
-            // m; the implicit steps' node contacts alone tipped it over after 2.8 m).
-            assert!(
-                (0.85..0.97).contains(&travelled),
-                "{name}: slid {travelled} m"
-            );
+    for (model, integrator) in implicit_runs() {
+        let cube = Mesh::cuboid(Vector::splat(0.1), [4; DIM], CellKind::Simplex).unwrap();
+        let (mut world, h) = slid_along_the_floor(cube, 0.101, (model, integrator), 3.0);
+        let mut highest: Real = 0.0;
+        for _ in 0..120 {
+            world.step();
+            highest = highest.max(world.deformables[h].center_of_mass().dot(UP));
         }
+        let b = &world.deformables[h];
+        let name = format!("{model:?} {integrator:?}");
+        let (speed, travelled) = (b.center_of_mass_velocity().length(), b.center_of_mass()[0]);
+        eprintln!("{name}: slid {travelled:.3} m, highest {highest:.4} m, speed {speed:.3}");
+        // Tipped onto its edge its centre would be at 0.141 m.
+        assert!(highest < 0.11, "{name}: its centre rose to {highest} m");
+        assert!(speed < 0.05, "{name}: still moving at {speed} m/s");
+        // Coulomb's μ g stops it in 3²/(2 · 0.5 · 9.81) = 0.92 m (the explicit step: 0.915
+        // m; the implicit steps' node contacts alone tipped it over after 2.8 m).
+        assert!(
+            (0.85..0.97).contains(&travelled),
+            "{name}: slid {travelled} m"
+        );
     }
 }
 
@@ -748,29 +749,22 @@ fn a_ball_thrown_sliding_along_the_floor_rolls_under_the_implicit_steps() {
     // (2D): the soft ball's rolling resistance.
     let v = 2.0;
     let rolling = if DIM == 3 { 5.0 / 7.0 } else { 2.0 / 3.0 } * v;
-    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
-        for integrator in [
-            Integrator::Implicit { iterations: 2 },
-            Integrator::Midpoint { iterations: 2 },
-        ] {
-            let ball = Mesh::from_shape(&Ball::new(0.1), 0.025, CellKind::Simplex).unwrap();
-            let (mut world, h) = slid_along_the_floor(ball, 0.1, (model, integrator), v);
-            let mut slowest = v;
-            for _ in 0..60 {
-                world.step();
-                slowest = slowest.min(world.deformables[h].center_of_mass_velocity()[0]);
-            }
-            let speed = world.deformables[h].center_of_mass_velocity()[0];
-            let name = format!("{model:?} {integrator:?}");
-            eprintln!(
-                "{name}: {speed:.3} m/s after 1 s, slowest {slowest:.3} (rolling: {rolling:.3})"
-            );
-            assert!(
-                (0.65 * rolling..1.02 * rolling).contains(&speed),
-                "{name}: {speed} m/s after 1 s, rolling at {rolling}"
-            );
-            assert!(slowest > 0.6 * rolling, "{name}: slowed to {slowest} m/s");
+    for (model, integrator) in implicit_runs() {
+        let ball = Mesh::from_shape(&Ball::new(0.1), 0.025, CellKind::Simplex).unwrap();
+        let (mut world, h) = slid_along_the_floor(ball, 0.1, (model, integrator), v);
+        let mut slowest = v;
+        for _ in 0..60 {
+            world.step();
+            slowest = slowest.min(world.deformables[h].center_of_mass_velocity()[0]);
         }
+        let speed = world.deformables[h].center_of_mass_velocity()[0];
+        let name = format!("{model:?} {integrator:?}");
+        eprintln!("{name}: {speed:.3} m/s after 1 s, slowest {slowest:.3} (rolling: {rolling:.3})");
+        assert!(
+            (0.65 * rolling..1.02 * rolling).contains(&speed),
+            "{name}: {speed} m/s after 1 s, rolling at {rolling}"
+        );
+        assert!(slowest > 0.6 * rolling, "{name}: slowed to {slowest} m/s");
     }
 }
 
@@ -788,12 +782,7 @@ fn slid_along_the_floor(
     ground(&mut world, 0.5, 0.0);
     let body = DeformableBuilder::new(mesh)
         .model(model)
-        .material(Material {
-            density: 400.0,
-            young_modulus: 1e5,
-            damping_ratio: 0.3,
-            ..Default::default()
-        })
+        .material(SOFT_FOAM)
         .friction(0.5)
         .translation(UP * height)
         .linvel(Vector::X * speed)
@@ -815,30 +804,25 @@ fn a_cube_slides_and_a_ball_rolls_down_a_ramp_under_the_implicit_steps() {
     let seconds = 0.5;
     let along = 0.5 * 9.81 * slope.sin() * seconds * seconds;
     let rolling = if DIM == 3 { 5.0 / 7.0 } else { 2.0 / 3.0 };
-    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
-        for integrator in [
-            Integrator::Implicit { iterations: 2 },
-            Integrator::Midpoint { iterations: 2 },
-        ] {
-            let name = format!("{model:?} {integrator:?}");
-            let cube = Mesh::cuboid(Vector::splat(0.1), [4; DIM], CellKind::Simplex).unwrap();
-            let slid = on_a_ramp(cube, model, integrator, (-slope, 0.0, seconds));
-            let ball = Mesh::from_shape(&Ball::new(0.1), 0.025, CellKind::Simplex).unwrap();
-            let rolled = on_a_ramp(ball, model, integrator, (-slope, 0.8, seconds));
-            eprintln!(
-                "{name}: slid {slid:.4} m, rolled {rolled:.4} m (rigid: {along:.4}, {:.4})",
-                along * rolling
-            );
-            // Less the 2 mm drop onto the ramp.
-            assert!(
-                (slid - along).abs() < 0.1 * along,
-                "{name}: slid {slid} m, {along} m on ice"
-            );
-            assert!(
-                (0.7 * rolling * along..1.02 * rolling * along).contains(&rolled),
-                "{name}: rolled {rolled} m, a rigid ball {} m",
-                rolling * along
-            );
-        }
+    for (model, integrator) in implicit_runs() {
+        let name = format!("{model:?} {integrator:?}");
+        let cube = Mesh::cuboid(Vector::splat(0.1), [4; DIM], CellKind::Simplex).unwrap();
+        let slid = on_a_ramp(cube, model, integrator, (-slope, 0.0, seconds));
+        let ball = Mesh::from_shape(&Ball::new(0.1), 0.025, CellKind::Simplex).unwrap();
+        let rolled = on_a_ramp(ball, model, integrator, (-slope, 0.8, seconds));
+        eprintln!(
+            "{name}: slid {slid:.4} m, rolled {rolled:.4} m (rigid: {along:.4}, {:.4})",
+            along * rolling
+        );
+        // Less the 2 mm drop onto the ramp.
+        assert!(
+            (slid - along).abs() < 0.1 * along,
+            "{name}: slid {slid} m, {along} m on ice"
+        );
+        assert!(
+            (0.7 * rolling * along..1.02 * rolling * along).contains(&rolled),
+            "{name}: rolled {rolled} m, a rigid ball {} m",
+            rolling * along
+        );
     }
 }
