@@ -78,6 +78,11 @@ impl SoftSurface {
         0.5 * self.depth_limit
     }
 
+    /// The outward surface normal at `node` at the start of the step (zero inside).
+    pub fn facing(&self, node: usize) -> Vector {
+        self.normals.get(node).copied().unwrap_or(Vector::ZERO)
+    }
+
     /// The surface of `body` swept over the step under `gravity` (staying put if `still`).
     pub fn build(&mut self, body: &Deformable, gravity: Vector, dt: Real, still: bool) {
         let x = &body.state.positions;
@@ -292,7 +297,7 @@ pub(crate) fn find<'b>(
     let h = at.h;
     let (body, own) = body_of(i);
     let n_i = node as usize;
-    let facing = own.normals.get(n_i).copied().unwrap_or(Vector::ZERO);
+    let facing = own.facing(n_i);
     let p0 = body.state.positions[n_i];
     let p1 = p0 + body.state.velocities[n_i] * h;
     let skin = at.skin;
@@ -359,7 +364,7 @@ pub(crate) fn find<'b>(
 /// of `p` from the plane of one of its facets whose prism holds `p` (facets facing away left
 /// out): the nearest way out of that body when negative; when zero or positive, `p` is outside
 /// it, on or in front of a facet (`docs/ARCHITECTURE.md` §6.6).
-fn nearest_exits<'b>(
+pub(crate) fn nearest_exits<'b>(
     body_of: &impl Fn(usize) -> (&'b Deformable, &'b SoftSurface),
     (i, facing): (usize, Vector),
     p: Vector,

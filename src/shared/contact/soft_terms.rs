@@ -37,8 +37,10 @@
 //! terms added, so with converged sweeps no contact gives energy (a term's `λ` does work only
 //! against a depth the step closes); an unconverged step leaves a depth of about `λ/k` per node
 //! more than the last sweep found, which the next step's forgiveness does not push out (the
-//! pipeline reports it as interpenetration). Restitution between deformables under the
-//! implicit step is zero.
+//! pipeline reports it as interpenetration). Unconverged sweeps can also pump an island (a node
+//! driven into a facet harder than its penalty holds it); the pipeline's guard takes a step
+//! that ended with more energy, or with a node deeper inside another body, again explicitly
+//! (`pipeline/guard.rs`). Restitution between deformables under the implicit step is zero.
 
 use super::super::body::Deformable;
 use super::super::coupling::Substep;

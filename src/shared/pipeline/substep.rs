@@ -1353,6 +1353,31 @@ fn each_soft_hit(
     }
 }
 
+/// The deepest any live member's surface node is inside another member, by its nearest way
+/// out ([`soft::nearest_exits`]) among the facets its soft-contact table holds.
+pub(super) fn deepest_inside(members: &[Member<'_, '_>]) -> Real {
+    let mut exits = Vec::new();
+    let mut deepest: Real = 0.0;
+    for (i, m) in members.iter().enumerate().filter(|(_, m)| m.live) {
+        let (start, cands) = (&m.sc.soft.soft_start, &m.sc.soft.soft_cands);
+        let nodes = m.body.rest.mesh.boundary_nodes();
+        for (k, &node) in nodes.iter().enumerate() {
+            let (b0, b1) = (start[k] as usize, start[k + 1] as usize);
+            if b0 == b1 {
+                continue;
+            }
+            let body_of = |j: usize| (&*members[j].body, &members[j].sc.soft.soft_surface);
+            let facing = m.sc.soft.soft_surface.facing(node as usize);
+            let p = m.body.state.positions[node as usize];
+            soft::nearest_exits(&body_of, (i, facing), p, &cands[b0..b1], &mut exits);
+            for &(_, exit) in &exits {
+                deepest = deepest.max(-exit);
+            }
+        }
+    }
+    deepest
+}
+
 /// The two sides of a contact `find` found for a node of member `i`: its body, the facet's
 /// body (`None` with self contact) and which of them is still.
 fn sides<'s>(
