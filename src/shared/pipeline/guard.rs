@@ -13,7 +13,11 @@
 //! that gained more than [`ENERGY_SHARE`] of its energy scale, or ended a node deeper than
 //! [`DEPTH_SHARE`] of the smallest member's extent inside another (and deeper than it
 //! started), is rolled back (the members, the dynamic bodies they may push, their contact
-//! memory) and taken by the explicit substeps, which need no convergence.
+//! memory) and taken again in at least [`SPLIT`] substeps (each finds its contacts afresh, and
+//! a shorter step converges further); failing again, by the explicit substeps, which need no
+//! convergence. (Straight to the explicit step, a shape-matched pile of fifty cubes cost 20 %
+//! more than without the guard; through the shorter substeps, 15 % less, the explicit steps
+//! being rarer than the sweeps' failures were costly.)
 //!
 //! The energy is each live member's kinetic, elastic and gravitational energy; an island with
 //! a member bound to a bone is not checked (the bone does work on it).
@@ -28,6 +32,9 @@ use super::StepContext;
 /// and elastic energy and each one's weight times its own extent (what a body resting on the
 /// ground can give back).
 pub(super) const ENERGY_SHARE: Real = 1e-3;
+
+/// Substeps at least of a step taken again implicitly, before the explicit step.
+pub(super) const SPLIT: usize = 4;
 
 /// Share of the smallest live member's extent a node may end inside another member.
 pub(super) const DEPTH_SHARE: Real = 1e-2;
@@ -77,14 +84,14 @@ impl Guard {
 
     /// Puts the live members back at the start of the step, with the dynamic bodies they may
     /// push and their contact memory, ready for another run of the substeps.
-    pub fn roll_back(self, members: &mut [Member<'_, '_>], bodies: &mut RigidBodySet) {
-        for (m, memory) in members.iter_mut().zip(self.memories) {
+    pub fn roll_back(&self, members: &mut [Member<'_, '_>], bodies: &mut RigidBodySet) {
+        for (m, memory) in members.iter_mut().zip(&self.memories) {
             if !m.live {
                 continue;
             }
             let body = &mut *m.body;
             body.step.restore(&mut body.state);
-            body.step.soft_memory = memory;
+            body.step.soft_memory.clone_from(memory);
             body.step.midpoint.forget();
             m.sc.rigid.backup.restore(bodies);
             let touch = &mut m.sc.touch;

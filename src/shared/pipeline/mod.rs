@@ -29,8 +29,8 @@
 //!    Under [`Integrator::Midpoint`] a body in an impact on a collider takes the explicit
 //!    step ([`impact`]).
 //!    An island the implicit step solved with its contacts between members that ended with
-//!    more energy, or a body deeper inside another, is rolled back and stepped explicitly
-//!    ([`guard`]).
+//!    more energy, or a body deeper inside another, is rolled back and stepped again in
+//!    shorter substeps, then explicitly ([`guard`]).
 //! 4. **containment** ([`containment`]): a state that turned non-finite, or a cell stretched
 //!    past `max_stretch`, is rolled back to the start of the step with the rigid bodies it
 //!    pushed, and the body frozen; the surface's hierarchy is refitted to the final positions.
@@ -530,7 +530,7 @@ fn step_group<'a>(
     }
     // 3. substeps. The implicit step solves the contacts between its members inside its
     // sweeps when every live member takes it with a convex energy (shape matching; a step that
-    // gains energy or sinks a body into another is taken again explicitly, [`guard`]); it does
+    // gains energy or sinks a body into another is taken again, [`guard`]); it does
     // not answer a dynamic body that two of them push (a box pinched between two pads at 60 Hz
     // was launched): such an island, or one with another member, steps explicitly.
     let shares = members.len() > 1 && !shared.is_empty();
@@ -563,10 +563,26 @@ fn step_group<'a>(
         m.body.step.global_iterations = ctx.settings.global_iterations;
     }
     let guard = together.then(|| Guard::start(members, ctx)).flatten();
-    substep::run(&integrator, members, (soft, together), ctx, bodies);
-    if let Some(guard) = guard.filter(|g| g.failed(members, ctx)) {
-        guard.roll_back(members, bodies);
-        substep::run(&Integrator::Explicit, members, (soft, false), ctx, bodies);
+    substep::run(
+        &integrator,
+        members,
+        (soft, together.then_some(1)),
+        ctx,
+        bodies,
+    );
+    if let Some(guard) = guard {
+        // Again in shorter substeps, then explicitly.
+        let retries = [
+            (integrator, Some(guard::SPLIT)),
+            (Integrator::Explicit, None),
+        ];
+        for (integrator, together) in retries {
+            if !guard.failed(members, ctx) {
+                break;
+            }
+            guard.roll_back(members, bodies);
+            substep::run(&integrator, members, (soft, together), ctx, bodies);
+        }
     }
     record_touching(members);
     let mut ready = Vec::with_capacity(members.len());

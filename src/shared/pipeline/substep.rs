@@ -97,12 +97,12 @@ pub(super) struct Member<'m, 'a> {
 
 /// Runs the substeps of a group's step, the velocities advanced by `integrator`; with `soft`,
 /// the members meet each other's surfaces (and their own, with self contact) every substep,
-/// inside the integrator's solve with `together` ([`step_together`]), else on the velocities
-/// after it ([`soft_contacts`]).
+/// inside the integrator's solve with `together` ([`step_together`], in at least that many
+/// substeps), else on the velocities after it ([`soft_contacts`]).
 pub(super) fn run(
     integrator: &impl Integrate,
     members: &mut [Member<'_, '_>],
-    (soft, together): (bool, bool),
+    (soft, together): (bool, Option<usize>),
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
 ) {
@@ -116,8 +116,10 @@ pub(super) fn run(
     let mut t = 0.0;
     let mut substeps = 0;
     while let Some(h) = next_substep(integrator, members, &live, ctx, dt - t, substeps) {
-        if together {
-            let h = h.min(motion_bound(members, dt - t));
+        if let Some(pieces) = together {
+            let h = h
+                .min(motion_bound(members, dt - t))
+                .min(dt / pieces as Real);
             let at = substep_at(ctx, 0.0, h, t, &[]);
             step_together(integrator, members, (&live, &motions), ctx, &at, bodies);
             rigid_passes(members, &live, ctx, (h, t), &motions, false, bodies);
