@@ -93,6 +93,7 @@ impl Guard {
             body.step.restore(&mut body.state);
             body.step.soft_memory.clone_from(memory);
             body.step.midpoint.forget();
+            body.last.contacts.clear();
             m.sc.rigid.backup.restore(bodies);
             let touch = &mut m.sc.touch;
             touch.pushed.clear();
