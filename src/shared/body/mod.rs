@@ -167,6 +167,18 @@ impl Deformable {
             .sum()
     }
 
+    /// Gravitational energy `−Σ m g·x` under the acceleration `g` (its gravity scale applied
+    /// by the caller).
+    pub(crate) fn gravity_energy(&self, g: Vector) -> Real {
+        -self
+            .state
+            .positions
+            .iter()
+            .zip(&self.rest.masses)
+            .map(|(x, m)| m * g.dot(*x))
+            .sum::<Real>()
+    }
+
     /// Elastic energy stored in the elements.
     pub fn elastic_energy(&self) -> Real {
         self.state.elements.elastic_energy(&self.state.positions)

@@ -62,13 +62,7 @@ pub(super) fn diagnose(
 pub(super) fn energies(body: &mut Deformable, ctx: &StepContext<'_>) {
     let g = ctx.gravity * body.gravity_scale;
     let kinetic = body.kinetic_energy();
-    let gravity_energy = -body
-        .state
-        .positions
-        .iter()
-        .zip(&body.rest.masses)
-        .map(|(x, m)| m * g.dot(*x))
-        .sum::<Real>();
+    let gravity_energy = body.gravity_energy(g);
     let elastic = body.state.elements.elastic_energy(&body.state.positions);
     let r = &mut body.last.report;
     r.kinetic_energy = kinetic;

@@ -114,14 +114,9 @@ fn energy(members: &[Member<'_, '_>], ctx: &StepContext<'_>) -> (Real, Real) {
         let body = &*m.body;
         let g = ctx.gravity * body.gravity_scale;
         let (kinetic, elastic) = (body.kinetic_energy(), body.elastic_energy());
-        let x = &body.state.positions;
-        let (mut weight, mut height) = (0.0, 0.0);
-        for (p, mass) in x.iter().zip(&body.rest.masses) {
-            weight += mass * g.length();
-            height -= mass * g.dot(*p);
-        }
-        energy += kinetic + elastic + height;
-        scale += kinetic + elastic + weight * extent(x);
+        let weight = body.rest.masses.iter().sum::<Real>() * g.length();
+        energy += kinetic + elastic + body.gravity_energy(g);
+        scale += kinetic + elastic + weight * extent(&body.state.positions);
     }
     (energy, scale)
 }
