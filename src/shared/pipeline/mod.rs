@@ -96,8 +96,10 @@ pub struct PipelineSettings {
     /// ([`DeformableReport::exploded`](super::DeformableReport::exploded)). Infinite turns the
     /// test off.
     pub max_stretch: Real,
-    /// A body whose every free node is slower than this (m/s) is still (default 0.05 m/s,
-    /// rapier 0.36's default `normalized_linear_threshold` at unit length).
+    /// A body whose every free node moved slower than this (m/s) over the step, from where it
+    /// started the step to where it ends it, is still (default 0.05 m/s, rapier 0.36's default
+    /// `normalized_linear_threshold` at unit length; like rapier's dynamic bodies, the drift
+    /// counts, not the velocity the last substep left).
     pub sleep_speed: Real,
     /// A body still this long (s), with no bone it is bound to moving and no moving or awake
     /// dynamic body near it, falls asleep (default 0.5 s, rapier 0.36's `time_until_sleep`).
