@@ -48,6 +48,22 @@ fn a_tower_built_at_rest_stands_gains_no_energy_and_sleeps() {
     }
 }
 
+/// At 1 ms the cubes' corners held on the neighbours' facets end some steps with their last
+/// substep's push as velocity, not moving: the tower of six sleeps all the same.
+#[test]
+fn an_edge_repulsion_tower_of_six_sleeps_at_a_millisecond() {
+    let scene = TowerScene {
+        subject: Subject::Sinew(ElementModel::EdgeRepulsion),
+        dt: 0.001,
+        ..Default::default()
+    };
+    let r = scene.run().unwrap();
+    assert!(!r.failed, "{:?}", r.failure);
+    assert!(r.energy_over_start.unwrap() <= 1e-3);
+    assert!(r.scatter.unwrap() <= 0.05, "scatter {:?}", r.scatter);
+    assert_eq!(r.asleep, Some(true), "not asleep at the end");
+}
+
 #[test]
 fn the_tower_stands_under_the_implicit_step_solved_together() {
     // Under the implicit setting a shape-matched tower is one island solved with its contacts
