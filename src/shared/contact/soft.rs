@@ -214,7 +214,7 @@ impl NearFacets {
 /// and surface, for self contact), its own facets too, but for those it leaves alone.
 pub(crate) fn node_tables<'s>(
     body: &Deformable,
-    others: impl Iterator<Item = (usize, &'s SoftSurface)> + Clone,
+    others: impl Iterator<Item = (usize, &'s SoftSurface)>,
     own: Option<(usize, &SoftSurface)>,
     dt: Real,
     widen: Real,
@@ -225,19 +225,37 @@ pub(crate) fn node_tables<'s>(
     cands.clear();
     start.push(0);
     let near = own.map(|_| body.rest.near_facets());
+    let node_box = |i: u32| {
+        let (x, v) = (
+            body.state.positions[i as usize],
+            body.state.velocities[i as usize],
+        );
+        let mut b = Aabb::new_invalid();
+        b.take_point(x);
+        b.take_point(x + v * dt);
+        b.loosened(widen)
+    };
+    // The other surfaces any of its nodes' boxes may reach: in a pile each body is near a few
+    // of the island's, and a tree query costs more than its root box's test.
+    let mut region = Aabb::new_invalid();
+    for &i in body.rest.mesh.boundary_nodes() {
+        if !body.is_attached(i) {
+            region.merge(&node_box(i));
+        }
+    }
+    let near_others: Vec<(usize, &SoftSurface)> = others
+        .filter(|(_, surface)| {
+            !surface.tree.is_empty() && surface.tree.root_aabb().intersects(&region)
+        })
+        .collect();
     for (k, &i) in body.rest.mesh.boundary_nodes().iter().enumerate() {
         if !body.is_attached(i) {
-            let (x, v) = (
-                body.state.positions[i as usize],
-                body.state.velocities[i as usize],
-            );
-            let mut b = Aabb::new_invalid();
-            b.take_point(x);
-            b.take_point(x + v * dt);
-            let b = b.loosened(widen);
+            let b = node_box(i);
             let begin = cands.len();
-            for (m, surface) in others.clone() {
-                cands.extend(surface.tree.intersect_aabb(&b).map(|f| (m as u32, f)));
+            for &(m, surface) in &near_others {
+                if surface.tree.root_aabb().intersects(&b) {
+                    cands.extend(surface.tree.intersect_aabb(&b).map(|f| (m as u32, f)));
+                }
             }
             if let (Some((m, surface)), Some(near)) = (own, near) {
                 let skip = near.of(k);
