@@ -178,6 +178,10 @@ pub struct Args {
     /// Gap below each cube of the tower as built, m (default 0: at rest).
     #[arg(long)]
     pub gap: Option<f64>,
+    /// Tower: the rate sinew's cubes' deformation is damped toward their rigid motion, 1/s
+    /// (`DeformableBuilder::deformation_damping`, default 0).
+    #[arg(long)]
+    pub deformation_damping: Option<f64>,
     /// `advise`: the smallest cell volume ratio allowed (default 0: no inverted cell).
     #[arg(long)]
     pub min_volume: Option<f64>,
@@ -917,6 +921,9 @@ macro_rules! dimension_runner {
                                     integrator: cube.integrator,
                                     resolution: args.res.unwrap_or(d.resolution),
                                     gap: args.gap.map_or(d.gap, |v| v as Real),
+                                    deformation_damping: args
+                                        .deformation_damping
+                                        .map_or(d.deformation_damping, |v| v as Real),
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
                                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                     material: material(args, d.material),

@@ -160,6 +160,9 @@ mod imp {
         /// The midpoint step's state between steps (absent in older snapshots).
         #[serde(default)]
         midpoint: Option<MidpointCarry>,
+        /// The deformation damping rate (absent in older snapshots: none).
+        #[serde(default)]
+        deformation_damping: Real,
     }
 
     impl Serialize for Deformable {
@@ -177,6 +180,7 @@ mod imp {
                 limiter: Some(self.step.limiter).filter(|l| l.is_finite()),
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
+                deformation_damping: self.deformation_damping,
                 frozen: self.activation.frozen,
                 report: Cow::Borrowed(&self.last.report),
                 attachments: Cow::Borrowed(self.bindings.list()),
@@ -237,10 +241,14 @@ mod imp {
                 && c.friction >= 0.0
                 && (0.0..=1.0).contains(&c.restitution)
                 && self.gravity_scale.is_finite()
+                && self.deformation_damping.is_finite()
+                && self.deformation_damping >= 0.0
                 && self.still_time.is_finite();
             if !coefficients_ok {
                 return Err(
-                    "friction, restitution, gravity scale or still time out of range".into(),
+                    "friction, restitution, gravity scale, deformation damping or still \
+                     time out of range"
+                        .into(),
                 );
             }
             let bindings = Bindings::from_list(self.attachments.into_owned(), n)?;
@@ -279,6 +287,7 @@ mod imp {
                 bindings,
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
+                deformation_damping: self.deformation_damping,
                 user_data: self.user_data,
             })
         }

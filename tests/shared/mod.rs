@@ -4,6 +4,7 @@ mod auto;
 mod bones;
 mod cantilever;
 mod contact;
+mod deformation_damping;
 mod determinism;
 mod elements;
 mod energy;

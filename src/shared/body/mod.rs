@@ -37,6 +37,8 @@ pub struct Deformable {
     pub(crate) bindings: Bindings,
     pub(crate) contact: ContactMaterial,
     pub(crate) gravity_scale: Real,
+    /// [`DeformableBuilder::deformation_damping`](super::DeformableBuilder::deformation_damping).
+    pub(crate) deformation_damping: Real,
     /// Free for the user.
     pub user_data: u128,
 }
@@ -282,6 +284,68 @@ impl Deformable {
         if !can_sleep {
             self.wake_up();
         }
+    }
+
+    /// The rate (1/s) at which the body's deformation is damped toward its rigid motion (see
+    /// [`DeformableBuilder::deformation_damping`]).
+    pub fn deformation_damping(&self) -> Real {
+        self.deformation_damping
+    }
+
+    /// Sets the rate of [`DeformableBuilder::deformation_damping`]; a negative or non-finite
+    /// rate is an error and changes nothing.
+    pub fn set_deformation_damping(&mut self, rate: Real) -> Result<(), BuildError> {
+        if !(rate.is_finite() && rate >= 0.0) {
+            return Err(BuildError::InvalidParameter {
+                name: "deformation_damping",
+                value: rate,
+                expected: "a non-negative finite rate (1/s)",
+            });
+        }
+        self.deformation_damping = rate;
+        Ok(())
+    }
+
+    /// Pulls the free nodes' velocities toward the body's best-fit rigid motion (the velocity
+    /// of the centre of mass and the angular velocity that carry the body's momentum and angular
+    /// momentum) by `1 − exp(−rate · dt)`: the deformation's kinetic energy falls, the
+    /// momentum and angular momentum stay. Bound nodes keep their bones' velocities (their share
+    /// of the momentum is the bones' to change). Does nothing at rate 0.
+    pub(crate) fn damp_deformation(&mut self, dt: Real) {
+        let rate = self.deformation_damping;
+        if rate <= 0.0 || dt <= 0.0 {
+            return;
+        }
+        let (x, v, m) = (
+            &self.state.positions,
+            &self.state.velocities,
+            &self.rest.masses,
+        );
+        let total: Real = m.iter().sum();
+        if total <= 0.0 {
+            return;
+        }
+        let centre = x.iter().zip(m).map(|(p, w)| *p * *w).sum::<Vector>() / total;
+        let linvel = v.iter().zip(m).map(|(u, w)| *u * *w).sum::<Vector>() / total;
+        let r: Vec<Vector> = x.iter().map(|p| *p - centre).collect();
+        let momentum = r
+            .iter()
+            .zip(v)
+            .zip(m)
+            .fold(AngVector::default(), |l, ((r, u), w)| {
+                l + math::cross(*r, (*u - linvel) * *w)
+            });
+        let angvel = math::angular_velocity_for(&r, m, momentum);
+        let keep = (-rate * dt).exp();
+        for (i, r) in r.iter().enumerate() {
+            if self.is_attached(i as u32) {
+                continue;
+            }
+            let rigid = linvel + math::ang_cross(angvel, *r);
+            let u = &mut self.state.velocities[i];
+            *u = rigid + (*u - rigid) * keep;
+        }
+        self.step.forces_valid = false;
     }
 
     /// Whether the body's surface meets itself (see [`DeformableBuilder::self_contact`]).

@@ -723,6 +723,9 @@ pub struct TowerScene {
     pub gap: Real,
     /// Sideways distance between one cube's axis and the next, m.
     pub offset: Real,
+    /// sinew's cubes: the rate their deformation is damped toward their rigid motion, 1/s
+    /// (`DeformableBuilder::deformation_damping`; rapier's bodies get none).
+    pub deformation_damping: Real,
     /// Step length, s.
     pub dt: Real,
     /// Simulated time, s.
@@ -750,6 +753,7 @@ impl Default for TowerScene {
             restitution: 0.0,
             gap: 0.0,
             offset: 0.03,
+            deformation_damping: 0.0,
             dt: 1.0 / 60.0,
             seconds: 10.0,
             integrator: Integrator::Explicit,
@@ -776,6 +780,7 @@ impl TowerScene {
                 at[0] = if k % 2 == 0 { -0.5 } else { 0.5 } * self.offset;
                 let mut spec = BodySpec::new(mesh.clone(), at, self.material);
                 spec.friction = self.friction;
+                spec.deformation_damping = self.deformation_damping;
                 spec.restitution = self.restitution;
                 spec
             })

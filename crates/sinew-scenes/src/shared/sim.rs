@@ -54,6 +54,8 @@ pub(crate) struct BodySpec {
     pub pins: Vec<(RigidBodyHandle, Vec<u32>)>,
     /// sinew only: whether the surface meets itself.
     pub self_contact: bool,
+    /// sinew only: the rate of `DeformableBuilder::deformation_damping`, 1/s.
+    pub deformation_damping: Real,
 }
 
 impl BodySpec {
@@ -68,6 +70,7 @@ impl BodySpec {
             restitution: 0.5,
             pins: Vec::new(),
             self_contact: false,
+            deformation_damping: 0.0,
         }
     }
 }
@@ -149,6 +152,7 @@ pub(crate) fn insert_soft(
                 .translation(spec.translation)
                 .rotation(spec.rotation)
                 .self_contact(spec.self_contact)
+                .deformation_damping(spec.deformation_damping)
                 .build()?;
             let h = world.insert(body);
             for (body, nodes) in &spec.pins {
