@@ -6,7 +6,7 @@ use super::error::BuildError;
 use super::material::{Material, Stiffness};
 use super::math::{self, AngVector, Real, Vector, DIM};
 use super::mesh::Mesh;
-use super::model::{Accumulator, ElementModel};
+use super::model::{Accumulator, ElementModel, Motion};
 use super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::rapier::geometry::{ColliderHandle, ColliderSet};
 use super::report::DeformableReport;
@@ -316,32 +316,22 @@ impl Deformable {
         if rate <= 0.0 || dt <= 0.0 {
             return;
         }
-        let (x, v, m) = (
-            &self.state.positions,
-            &self.state.velocities,
-            &self.rest.masses,
-        );
-        let total: Real = m.iter().sum();
-        if total <= 0.0 {
+        let masses = &self.rest.masses;
+        let Some(Motion {
+            velocity,
+            r,
+            momentum,
+        }) = Motion::of(&self.state.positions, &self.state.velocities, masses)
+        else {
             return;
-        }
-        let centre = x.iter().zip(m).map(|(p, w)| *p * *w).sum::<Vector>() / total;
-        let linvel = v.iter().zip(m).map(|(u, w)| *u * *w).sum::<Vector>() / total;
-        let r: Vec<Vector> = x.iter().map(|p| *p - centre).collect();
-        let momentum = r
-            .iter()
-            .zip(v)
-            .zip(m)
-            .fold(AngVector::default(), |l, ((r, u), w)| {
-                l + math::cross(*r, (*u - linvel) * *w)
-            });
-        let angvel = math::angular_velocity_for(&r, m, momentum);
+        };
+        let angvel = math::angular_velocity_for(&r, masses, momentum);
         let keep = (-rate * dt).exp();
         for (i, r) in r.iter().enumerate() {
             if self.is_attached(i as u32) {
                 continue;
             }
-            let rigid = linvel + math::ang_cross(angvel, *r);
+            let rigid = velocity + math::ang_cross(angvel, *r);
             let u = &mut self.state.velocities[i];
             *u = rigid + (*u - rigid) * keep;
         }

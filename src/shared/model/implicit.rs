@@ -61,14 +61,14 @@ mod global;
 
 use std::ops::Range;
 
-use super::super::math::{self, AngVector, Matrix, Real, Rotation, Vector, SIMPLEX_ARITY};
+use super::super::math::{self, Matrix, Real, Rotation, Vector, SIMPLEX_ARITY};
 use super::super::threads;
 use super::edge_repulsion::EdgeRepulsion;
 use super::hessian;
 use super::shape_matching::ShapeMatching;
 use super::springs::{Law, Springs};
 use super::volume::Volume;
-use super::{Elements, ModelState};
+use super::{Elements, ModelState, Motion};
 
 /// Smallest height a line-searched step may leave a vertex at, over its rest height.
 pub const MIN_STEP_HEIGHT: Real = 0.1;
@@ -723,38 +723,6 @@ impl Solve<'_> {
             }
         }
         self.vertex.shape.map(|s| s.rotations)
-    }
-}
-
-/// A body's motion about its centre of mass: the centre's velocity, each node's offset from
-/// the centre, and the angular momentum about it.
-struct Motion {
-    velocity: Vector,
-    r: Vec<Vector>,
-    momentum: AngVector,
-}
-
-impl Motion {
-    /// Of nodes at `x0` moving at `v0`; `None` without mass.
-    fn of(x0: &[Vector], v0: &[Vector], masses: &[Real]) -> Option<Self> {
-        let mass: Real = masses.iter().sum();
-        if mass.is_nan() || mass <= 0.0 {
-            return None;
-        }
-        let centre = x0.iter().zip(masses).map(|(p, m)| *p * *m).sum::<Vector>() / mass;
-        let velocity = v0.iter().zip(masses).map(|(v, m)| *v * *m).sum::<Vector>() / mass;
-        let r: Vec<Vector> = x0.iter().map(|p| *p - centre).collect();
-        let momentum = r
-            .iter()
-            .zip(v0)
-            .zip(masses)
-            .map(|((r, v), m)| math::cross(*r, (*v - velocity) * *m))
-            .fold(math::ANG_ZERO, |a, b| a + b);
-        Some(Motion {
-            velocity,
-            r,
-            momentum,
-        })
     }
 }
 

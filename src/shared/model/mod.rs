@@ -71,7 +71,7 @@ pub(crate) use implicit::{Hold, Solve, StepInput, MIN_STEP_VOLUME};
 
 use super::error::BuildError;
 use super::material::{Resolved, Stiffness};
-use super::math::{Real, Rotation, Vector, SIMPLEX_ARITY};
+use super::math::{self, AngVector, Real, Rotation, Vector, SIMPLEX_ARITY};
 use super::mesh::{CellKind, Mesh};
 
 /// How the shape-based element finds its cell's rotation.
@@ -571,5 +571,37 @@ pub(crate) fn substep_under(estimate: Real, certain: Real, safety: Real, calibra
         (safety * estimate).min(certain)
     } else {
         safety * certain
+    }
+}
+
+/// A body's motion about its centre of mass: the centre's velocity, each node's offset from
+/// the centre, and the angular momentum about it.
+pub(crate) struct Motion {
+    pub velocity: Vector,
+    pub r: Vec<Vector>,
+    pub momentum: AngVector,
+}
+
+impl Motion {
+    /// Of nodes at `x0` moving at `v0`; `None` without mass.
+    pub fn of(x0: &[Vector], v0: &[Vector], masses: &[Real]) -> Option<Self> {
+        let mass: Real = masses.iter().sum();
+        if mass.is_nan() || mass <= 0.0 {
+            return None;
+        }
+        let centre = x0.iter().zip(masses).map(|(p, m)| *p * *m).sum::<Vector>() / mass;
+        let velocity = v0.iter().zip(masses).map(|(v, m)| *v * *m).sum::<Vector>() / mass;
+        let r: Vec<Vector> = x0.iter().map(|p| *p - centre).collect();
+        let momentum = r
+            .iter()
+            .zip(v0)
+            .zip(masses)
+            .map(|((r, v), m)| math::cross(*r, (*v - velocity) * *m))
+            .fold(math::ANG_ZERO, |a, b| a + b);
+        Some(Motion {
+            velocity,
+            r,
+            momentum,
+        })
     }
 }
