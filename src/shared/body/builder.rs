@@ -160,7 +160,7 @@ impl DeformableBuilder {
     }
 
     /// Rate (1/s) at which the body's velocities are pulled toward its best-fit rigid motion
-    /// (default 0: off), as rapier 0.36's `SoftBodyMaterial::deformation_damping`: it damps
+    /// (default 0: off), as the `deformation_damping` of rapier 0.36's own soft bodies: it damps
     /// every deformation mode by `exp(-rate · t)` and keeps the body's momentum and angular
     /// momentum, so a fall, a throw or a spin go on undamped. The material's damping ratio
     /// damps each element's own oscillation and the body's slow modes far less
