@@ -49,7 +49,7 @@
 //! per-cell warm-start rotations; the element forces and stiffness/damping bounds of the last
 //! evaluation with the flag that says whether they are still current, and the crossing
 //! limiter; the contact material (coefficients, combine rules, collision groups); gravity
-//! scale; bindings to rigid bodies; contacts and touched colliders of the last step (they
+//! scale; deformation damping rate; bindings to rigid bodies; contacts and touched colliders of the last step (they
 //! drive contact events and waking); frozen, sleep flag, still time and `can_sleep`; the
 //! last report; `user_data`. For the world also rapier's `PhysicsWorld` (as rapier serializes
 //! it), the pipeline's settings and last report, the simulated time and step count.

@@ -1,7 +1,8 @@
 //! `DeformableBuilder::deformation_damping`: a body's deformation is damped toward its rigid
 //! motion, which it keeps.
 
-use crate::dim::math::{ang_cross, ang_norm, cross, AngVector, Real, Vector, DIM};
+use crate::dim::math::{ang_cross, ang_norm, cross, AngVector, Pose, Real, Vector, DIM};
+use crate::dim::rapier::prelude::RigidBodyBuilder;
 use crate::dim::{
     BuildError, DeformableBuilder, DeformableHandle, DeformableWorld, ElementModel, Integrator,
     Material,
@@ -114,7 +115,7 @@ fn deformation_damping_stills_the_stretch_and_keeps_the_momenta() {
                 left[k] = ringing / start;
             }
             assert!(
-                left[1] < 1e-3 && left[0] > 10.0 * left[1],
+                left[1] < 1e-3 && left[0] > 1e-2,
                 "{name}: deformation's kinetic energy left after 1 s, undamped {} damped {}",
                 left[0],
                 left[1]
@@ -151,7 +152,8 @@ fn a_negative_or_nan_deformation_damping_is_an_error() {
 }
 
 /// Dropped from 10 cm gaps at 1 ms, shape-matched squares that keep rocking on each other walk
-/// off the axis (10 cm in 2D); damped toward their rigid motion they land within 5 cm of it.
+/// off the axis (10 cm in 2D, `scenes tower --dim 2 --gap 0.1 --dt 0.001`); damped toward their
+/// rigid motion they land within 5 cm of it.
 #[test]
 fn a_dropped_tower_damped_toward_rigid_motion_lands_on_its_axis() {
     if DIM == 3 {
@@ -170,6 +172,44 @@ fn a_dropped_tower_damped_toward_rigid_motion_lands_on_its_axis() {
     let scatter = damped.scatter.unwrap();
     assert!(scatter <= 0.05, "damped: a square ended {scatter} m off");
     assert!(damped.energy_over_start.unwrap() <= 1e-3);
-    let free = scene(0.0).run().unwrap().scatter.unwrap();
-    assert!(free > 0.05, "undamped it walked off: {free} m");
+}
+
+/// The bound nodes are left out of the fit: free nodes at rest, with no force on them (no
+/// stiffness, no gravity), stay at rest while the bone they hang from moves off; counted in,
+/// the bone's speed would drag them along.
+#[test]
+fn deformation_damping_does_not_drag_the_free_nodes_after_a_bone() {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    world.physics.gravity = Vector::ZERO;
+    let bone = world
+        .physics
+        .insert_body(RigidBodyBuilder::kinematic_position_based());
+    let body = DeformableBuilder::cuboid(Vector::splat(0.5), [3; DIM])
+        .model(ElementModel::SHAPE_MATCHING)
+        .material(Material {
+            young_modulus: 0.0,
+            damping_ratio: 0.0,
+            ..Default::default()
+        })
+        .deformation_damping(50.0)
+        .build()
+        .unwrap();
+    let h = world.insert(body);
+    let low: Vec<u32> = (0..world.deformables[h].num_nodes() as u32)
+        .filter(|&i| world.deformables[h].positions()[i as usize].x < -0.4)
+        .collect();
+    world.attach_nodes(h, bone, &low).unwrap();
+    for k in 1..=10 {
+        let at = Vector::X * (0.05 * k as Real);
+        world.physics.bodies[bone].set_next_kinematic_position(Pose::from_translation(at));
+        world.step();
+    }
+    let b = &world.deformables[h];
+    let fastest = (0..b.num_nodes())
+        .filter(|&i| !b.is_attached(i as u32))
+        .map(|i| b.velocities()[i].length())
+        .fold(0.0, Real::max);
+    assert!(fastest < 1e-6, "a free node moves at {fastest} m/s");
+    assert!(low.iter().all(|&i| b.is_attached(i)));
 }

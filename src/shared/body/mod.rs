@@ -306,31 +306,34 @@ impl Deformable {
         Ok(())
     }
 
-    /// Pulls the free nodes' velocities toward the body's best-fit rigid motion (the velocity
-    /// of the centre of mass and the angular velocity that carry the body's momentum and angular
-    /// momentum) by `1 − exp(−rate · dt)`: the deformation's kinetic energy falls, the
-    /// momentum and angular momentum stay. Bound nodes keep their bones' velocities (their share
-    /// of the momentum is the bones' to change). Does nothing at rate 0.
+    /// Pulls the free nodes' velocities toward their best-fit rigid motion (the velocity of
+    /// their centre of mass and the angular velocity that carry their momentum and angular
+    /// momentum) by `1 − exp(−rate · dt)`: their deformation's kinetic energy falls, their
+    /// momentum and angular momentum stay. Bound nodes keep their bones' velocities and are
+    /// left out of the fit (counted in, a body hanging from a moving bone was dragged along).
+    /// Does nothing at rate 0.
     pub(crate) fn damp_deformation(&mut self, dt: Real) {
         let rate = self.deformation_damping;
         if rate <= 0.0 || dt <= 0.0 {
             return;
         }
-        let masses = &self.rest.masses;
+        let free: Vec<usize> = (0..self.state.positions.len())
+            .filter(|&i| !self.is_attached(i as u32))
+            .collect();
+        let pick = |of: &[Vector]| free.iter().map(|&i| of[i]).collect::<Vec<Vector>>();
+        let masses: Vec<Real> = free.iter().map(|&i| self.rest.masses[i]).collect();
+        let (x, v) = (pick(&self.state.positions), pick(&self.state.velocities));
         let Some(Motion {
             velocity,
             r,
             momentum,
-        }) = Motion::of(&self.state.positions, &self.state.velocities, masses)
+        }) = Motion::of(&x, &v, &masses)
         else {
             return;
         };
-        let angvel = math::angular_velocity_for(&r, masses, momentum);
+        let angvel = math::angular_velocity_for(&r, &masses, momentum);
         let keep = (-rate * dt).exp();
-        for (i, r) in r.iter().enumerate() {
-            if self.is_attached(i as u32) {
-                continue;
-            }
+        for (&i, r) in free.iter().zip(&r) {
             let rigid = velocity + math::ang_cross(angvel, *r);
             let u = &mut self.state.velocities[i];
             *u = rigid + (*u - rigid) * keep;

@@ -621,7 +621,9 @@ fn check_member(
     body.refit_surface();
     // 5. report
     finish::diagnose(body, sc, &m.candidates, m.stats, quality);
-    let ready = sleep::update(body, ctx, bodies, &sc.broad, quality.is_some());
+    // A body that ran out of substeps did not cover the step: its drift says nothing.
+    let sane = quality.is_some() && !m.stats.cap_hit;
+    let ready = sleep::update(body, ctx, bodies, &sc.broad, sane);
     m.times.integrate = integrate_start.elapsed().as_secs_f64();
     Some(ready)
 }

@@ -42,6 +42,10 @@ pub(super) fn prepare<'a>(
 ) -> Candidates<'a> {
     let dt = ctx.dt;
     let g = ctx.gravity * body.gravity_scale;
+    // The deformation damping over the whole step, first: every later phase (the broad
+    // phase's swept boxes, the island guard's starting energy, a rollback) sees the damped
+    // velocities, and the substeps' contacts act after it.
+    body.damp_deformation(dt);
     body.step.save(&body.state);
 
     // Bodies this deformable is bound to, and how every relevant body moves.

@@ -173,7 +173,8 @@ pub(super) fn update(
     // Each free node's velocity over the step, from where it started: a node held on a
     // contact can end a step with the velocity of its last substep's push (a corner pressed
     // into a neighbour's facet leaves every twentieth step at 0.07 m/s, moving 10 µm a step),
-    // which is no motion. Rapier 0.36 sleeps its dynamic bodies on the same drift.
+    // which is no motion. Rapier 0.36 sleeps its dynamic bodies on their drift too (with twice
+    // this budget).
     let start = &body.step.saved_positions;
     let max_drift = (0..body.state.positions.len())
         .filter(|&i| !body.is_attached(i as u32))

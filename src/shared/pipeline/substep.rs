@@ -113,11 +113,6 @@ pub(super) fn run(
         .iter_mut()
         .map(|m| std::mem::take(&mut m.sc.broad.motions))
         .collect();
-    // The deformation damping over the whole step, before the forces and contacts of its
-    // substeps (they act last; the pull would otherwise undo a contact's stop).
-    for &i in &live {
-        members[i].body.damp_deformation(dt);
-    }
     let mut t = 0.0;
     let mut substeps = 0;
     while let Some(h) = next_substep(integrator, members, &live, ctx, dt - t, substeps) {
