@@ -1,5 +1,6 @@
 //! Nodes bound to rigid bodies (issue 3, acceptance 1, 2, 6).
 
+use super::support::weightless_with_bone;
 use crate::dim::math::{self, Pose, Real, Vector, DIM, UP};
 use crate::dim::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
 use crate::dim::{AttachError, DeformableBuilder, DeformableWorld, ElementModel, Material};
@@ -33,12 +34,7 @@ fn tissue(
 
 #[test]
 fn nodes_follow_a_moving_and_turning_kinematic_bone_exactly() {
-    let mut world = DeformableWorld::new();
-    world.set_dt(1.0 / 60.0);
-    world.physics.gravity = Vector::ZERO;
-    let bone = world
-        .physics
-        .insert_body(RigidBodyBuilder::kinematic_position_based());
+    let (mut world, bone) = weightless_with_bone();
     let collider = world
         .physics
         .insert_collider(cuboid(Vector::splat(0.3)), Some(bone));

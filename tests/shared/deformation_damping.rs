@@ -1,8 +1,8 @@
 //! `DeformableBuilder::deformation_damping`: a body's deformation is damped toward its rigid
 //! motion, which it keeps.
 
+use super::support::weightless_with_bone;
 use crate::dim::math::{ang_cross, ang_norm, cross, AngVector, Pose, Real, Vector, DIM};
-use crate::dim::rapier::prelude::RigidBodyBuilder;
 use crate::dim::{
     BuildError, DeformableBuilder, DeformableHandle, DeformableWorld, ElementModel, Integrator,
     Material,
@@ -179,12 +179,7 @@ fn a_dropped_tower_damped_toward_rigid_motion_lands_on_its_axis() {
 /// the bone's speed would drag them along.
 #[test]
 fn deformation_damping_does_not_drag_the_free_nodes_after_a_bone() {
-    let mut world = DeformableWorld::new();
-    world.set_dt(1.0 / 60.0);
-    world.physics.gravity = Vector::ZERO;
-    let bone = world
-        .physics
-        .insert_body(RigidBodyBuilder::kinematic_position_based());
+    let (mut world, bone) = weightless_with_bone();
     let body = DeformableBuilder::cuboid(Vector::splat(0.5), [3; DIM])
         .model(ElementModel::SHAPE_MATCHING)
         .material(Material {

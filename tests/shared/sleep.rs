@@ -1,5 +1,6 @@
 //! Resting deformables sleep like rapier bodies and wake on contact or bone motion (issue 6).
 
+use super::support::weightless_with_bone;
 use crate::dim::math::{Real, Vector, DIM, UP};
 use crate::dim::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
 use crate::dim::{DeformableBuilder, DeformableHandle, DeformableWorld, ElementModel, Material};
@@ -119,12 +120,7 @@ fn a_falling_rigid_body_wakes_a_sleeping_one() {
 
 #[test]
 fn a_moving_bone_wakes_bound_tissue_and_drags_it_along() {
-    let mut world = DeformableWorld::new();
-    world.set_dt(1.0 / 60.0);
-    world.physics.gravity = Vector::ZERO;
-    let bone = world
-        .physics
-        .insert_body(RigidBodyBuilder::kinematic_position_based());
+    let (mut world, bone) = weightless_with_bone();
     let collider = world.physics.insert_collider(
         ColliderBuilder::new(crate::dim::rapier::geometry::SharedShape::new(
             crate::dim::rapier::geometry::Cuboid::new(Vector::splat(0.1)),

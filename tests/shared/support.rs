@@ -1,7 +1,20 @@
 //! Helpers for the shared tests.
 
 use crate::dim::math::{Real, Vector, DIM};
-use crate::dim::{CellKind, Mesh};
+use crate::dim::rapier::dynamics::RigidBodyHandle;
+use crate::dim::rapier::prelude::RigidBodyBuilder;
+use crate::dim::{CellKind, DeformableWorld, Mesh};
+
+/// A world at 60 Hz without gravity, with one kinematic (position-based) bone at the origin.
+pub fn weightless_with_bone() -> (DeformableWorld, RigidBodyHandle) {
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    world.physics.gravity = Vector::ZERO;
+    let bone = world
+        .physics
+        .insert_body(RigidBodyBuilder::kinematic_position_based());
+    (world, bone)
+}
 
 /// A deterministic random source (SplitMix64), so failures replay.
 pub struct Rng(u64);
