@@ -598,3 +598,5 @@ pub(crate) mod render {
 #[path = "shared/mod.rs"]
 mod shared;
 pub use shared::*;
+pub mod surface;
+pub use surface::{Surface, SurfaceError};

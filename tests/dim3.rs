@@ -69,3 +69,6 @@ mod rotation;
 
 #[path = "only3d/shapes.rs"]
 mod shapes_3d;
+
+#[path = "only3d/surface.rs"]
+mod surface;
