@@ -598,5 +598,6 @@ pub(crate) mod render {
 #[path = "shared/mod.rs"]
 mod shared;
 pub use shared::*;
+mod stuffing;
 pub mod surface;
 pub use surface::{Surface, SurfaceError};

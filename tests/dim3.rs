@@ -72,3 +72,6 @@ mod shapes_3d;
 
 #[path = "only3d/surface.rs"]
 mod surface;
+
+#[path = "only3d/stuffing.rs"]
+mod stuffing;

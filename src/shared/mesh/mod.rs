@@ -11,7 +11,7 @@ pub mod cube;
 mod diagnose;
 pub mod io;
 mod lattice;
-mod voxel;
+pub(crate) mod voxel;
 
 pub use super::error::MeshWarning;
 

@@ -1,4 +1,5 @@
-//! Lattices cut from parry shapes: [`Mesh::from_shape`].
+//! Lattices cut from parry shapes: [`Mesh::from_shape`] (and the shape checks the 3D
+//! isosurface stuffing shares).
 //!
 //! The shape is sampled on a grid: a lattice box (square in 2D, cube in 3D) is kept when its
 //! centre is inside the shape (`PointQuery::contains_local_point`). Of the boxes kept, the
@@ -52,50 +53,10 @@ impl Mesh {
         kind: CellKind,
     ) -> Result<Mesh, BuildError> {
         check_cell_size(cell_size)?;
-        let oriented: TriMesh;
-        let shape: &dyn Shape = match shape.as_trimesh() {
-            Some(t) if !t.flags().contains(TriMeshFlags::ORIENTED) => {
-                let mut t = t.clone();
-                t.set_flags(t.flags() | TriMeshFlags::ORIENTED)
-                    .map_err(|_| BuildError::InvalidParameter {
-                        name: "shape",
-                        value: 0.0,
-                        expected: "a closed, consistently oriented triangle mesh",
-                    })?;
-                oriented = t;
-                &oriented
-            }
-            _ => shape,
-        };
-        let aabb = shape.compute_local_aabb();
-        let extent = aabb.maxs - aabb.mins;
-        let centre = (aabb.maxs + aabb.mins) * 0.5;
-        // parry gives unbounded shapes (half-spaces) a box of half the largest real.
-        if !(extent.is_finite() && centre.is_finite()) || extent.max_element() >= Real::MAX / 4.0 {
-            return Err(BuildError::InvalidParameter {
-                name: "shape",
-                value: Real::INFINITY,
-                expected: "a bounded shape",
-            });
-        }
-        let mut counts = [1usize; DIM];
-        let mut total = 1usize;
-        for (d, n) in counts.iter_mut().enumerate() {
-            let c = (extent[d] / cell_size).ceil().max(1.0);
-            if c > MAX_BOXES as Real {
-                total = usize::MAX;
-                break;
-            }
-            *n = c as usize;
-            total = total.saturating_mul(*n);
-        }
-        if total > MAX_BOXES {
-            return Err(BuildError::InvalidParameter {
-                name: "cell_size",
-                value: cell_size,
-                expected: "a cell size giving at most 2^27 lattice boxes over the shape",
-            });
-        }
+        let oriented = oriented(shape)?;
+        let shape: &dyn Shape = oriented.as_ref().map_or(shape, |t| t as &dyn Shape);
+        let (centre, counts) = boxes_over(shape, cell_size, 0)?;
+        let total: usize = counts.iter().product();
         let mut half = Vector::ZERO;
         for d in 0..DIM {
             half[d] = 0.5 * counts[d] as Real * cell_size;
@@ -194,8 +155,66 @@ impl Mesh {
     }
 }
 
+/// `shape` ready for inside tests: a triangle mesh without `TriMeshFlags::ORIENTED` gets a
+/// copy with it (pseudo-normals); `None` when the shape is fine as it is.
+pub(crate) fn oriented(shape: &dyn Shape) -> Result<Option<TriMesh>, BuildError> {
+    match shape.as_trimesh() {
+        Some(t) if !t.flags().contains(TriMeshFlags::ORIENTED) => {
+            let mut t = t.clone();
+            t.set_flags(t.flags() | TriMeshFlags::ORIENTED)
+                .map_err(|_| BuildError::InvalidParameter {
+                    name: "shape",
+                    value: 0.0,
+                    expected: "a closed, consistently oriented triangle mesh",
+                })?;
+            Ok(Some(t))
+        }
+        _ => Ok(None),
+    }
+}
+
+/// A lattice of boxes of side `cell_size` over `shape`'s bounding box, `margin` boxes wider
+/// on every side: its centre and its box count along each axis. Errors for an unbounded
+/// shape or more than 2^27 boxes.
+pub(crate) fn boxes_over(
+    shape: &dyn Shape,
+    cell_size: Real,
+    margin: usize,
+) -> Result<(Vector, [usize; DIM]), BuildError> {
+    let aabb = shape.compute_local_aabb();
+    let extent = aabb.maxs - aabb.mins;
+    let centre = (aabb.maxs + aabb.mins) * 0.5;
+    // parry gives unbounded shapes (half-spaces) a box of half the largest real.
+    if !(extent.is_finite() && centre.is_finite()) || extent.max_element() >= Real::MAX / 4.0 {
+        return Err(BuildError::InvalidParameter {
+            name: "shape",
+            value: Real::INFINITY,
+            expected: "a bounded shape",
+        });
+    }
+    let mut counts = [1usize; DIM];
+    let mut total = 1usize;
+    for (d, n) in counts.iter_mut().enumerate() {
+        let c = (extent[d] / cell_size).ceil().max(1.0) + 2.0 * margin as Real;
+        if c > MAX_BOXES as Real {
+            total = usize::MAX;
+            break;
+        }
+        *n = c as usize;
+        total = total.saturating_mul(*n);
+    }
+    if total > MAX_BOXES {
+        return Err(BuildError::InvalidParameter {
+            name: "cell_size",
+            value: cell_size,
+            expected: "a cell size giving at most 2^27 lattice boxes over the shape",
+        });
+    }
+    Ok((centre, counts))
+}
+
 /// A cell size must be positive and finite.
-fn check_cell_size(cell_size: Real) -> Result<(), BuildError> {
+pub(crate) fn check_cell_size(cell_size: Real) -> Result<(), BuildError> {
     if cell_size.is_finite() && cell_size > 0.0 {
         Ok(())
     } else {
