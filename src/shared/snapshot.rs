@@ -92,6 +92,7 @@ mod imp {
         check_state, Activation, Deformable, LastStep, Rest, State, StepBuffers, SurfaceTree,
     };
     use super::super::contact::{ContactMaterial, ContactPoint};
+    use super::super::embedding::Embedding;
     use super::super::integrator::{MidpointCarry, MidpointState};
     use super::super::material::{Material, Resolved, Stiffness};
     use super::super::math::{Real, Rotation, Vector};
@@ -163,6 +164,9 @@ mod imp {
         /// The deformation damping rate (absent in older snapshots: none).
         #[serde(default)]
         deformation_damping: Real,
+        /// The render mesh (absent in older snapshots: none).
+        #[serde(default)]
+        render: Option<Cow<'a, Embedding>>,
     }
 
     impl Serialize for Deformable {
@@ -181,6 +185,7 @@ mod imp {
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
                 deformation_damping: self.deformation_damping,
+                render: self.render.as_ref().map(Cow::Borrowed),
                 frozen: self.activation.frozen,
                 report: Cow::Borrowed(&self.last.report),
                 attachments: Cow::Borrowed(self.bindings.list()),
@@ -252,6 +257,10 @@ mod imp {
                 );
             }
             let bindings = Bindings::from_list(self.attachments.into_owned(), n)?;
+            let render = self.render.map(Cow::into_owned);
+            if let Some(r) = &render {
+                r.check(n)?;
+            }
             let state = State {
                 positions: self.positions.into_owned(),
                 velocities: self.velocities.into_owned(),
@@ -288,6 +297,7 @@ mod imp {
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
                 deformation_damping: self.deformation_damping,
+                render,
                 user_data: self.user_data,
             })
         }

@@ -7,6 +7,7 @@ mod contact;
 mod deformation_damping;
 mod determinism;
 mod elements;
+mod embedding;
 mod energy;
 mod errors;
 mod fall;

@@ -213,3 +213,36 @@ fn a_json_snapshot_continues_bit_for_bit() {
         }
     }
 }
+
+#[test]
+fn a_render_mesh_round_trips_and_is_checked() {
+    use crate::dim::math::Vector;
+    use crate::dim::CellKind;
+    let mesh = Mesh::ball(0.25, 5, CellKind::Simplex).unwrap();
+    let mut body = DeformableBuilder::new(mesh.clone())
+        .translation(Vector::Y * 0.5)
+        .build()
+        .unwrap();
+    // The render mesh: the body's own surface, grown by 2 %.
+    let vertices: Vec<Vector> = mesh.nodes().iter().map(|p| *p * 1.02).collect();
+    body.set_render_mesh(&vertices, mesh.boundary_facets().to_vec())
+        .unwrap();
+    let mut restored: Deformable = bincode::deserialize(&save(&body)).expect("it restores");
+    assert_eq!(restored.render_mesh(), body.render_mesh());
+    // It follows the restored body.
+    let moved: Vec<Vector> = restored
+        .positions()
+        .iter()
+        .map(|p| *p + Vector::X)
+        .collect();
+    restored.set_positions(&moved).unwrap();
+    let (a, b) = (body.render_mesh().unwrap(), restored.render_mesh().unwrap());
+    for (p, q) in a.vertices().iter().zip(b.vertices()) {
+        assert!((*q - *p - Vector::X).length() < 1e-5);
+    }
+    // A render vertex bound to a node the body does not have is refused.
+    let mut json: serde_json::Value = serde_json::to_value(&body).unwrap();
+    json["render"]["nodes"][0][0] = serde_json::Value::from(1_000_000);
+    let err = serde_json::from_value::<Deformable>(json).expect_err("node out of range");
+    assert!(err.to_string().contains("render vertex"), "{err}");
+}

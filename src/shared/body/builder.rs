@@ -336,6 +336,7 @@ impl DeformableBuilder {
             },
             gravity_scale: self.gravity_scale,
             deformation_damping: self.deformation_damping,
+            render: None,
             user_data: self.user_data,
         })
     }

@@ -2,6 +2,7 @@
 
 use super::attach::{self, AttachError, Attachment, Bindings};
 use super::contact::{ContactMaterial, ContactPoint};
+use super::embedding::Embedding;
 use super::error::BuildError;
 use super::material::{Material, Stiffness};
 use super::math::{self, AngVector, Real, Vector, DIM};
@@ -39,6 +40,8 @@ pub struct Deformable {
     pub(crate) gravity_scale: Real,
     /// [`DeformableBuilder::deformation_damping`](super::DeformableBuilder::deformation_damping).
     pub(crate) deformation_damping: Real,
+    /// The render mesh, if one is bound ([`Deformable::set_render_mesh`]).
+    pub(crate) render: Option<Embedding>,
     /// Free for the user.
     pub user_data: u128,
 }
@@ -471,9 +474,40 @@ impl Deformable {
         dropped
     }
 
-    /// Brings the surface's hierarchy to the current positions.
+    /// Brings the surface's hierarchy, and the render mesh if there is one, to the current
+    /// positions.
     pub(crate) fn refit_surface(&mut self) {
         self.surface.refit(&self.rest.mesh, &self.state.positions);
+        if let Some(render) = &mut self.render {
+            render.update(&self.state.positions);
+        }
+    }
+
+    /// Binds a render mesh to this body: `vertices` (given in the body's rest frame, where
+    /// its [`mesh`](Self::mesh)'s nodes are) and `facets` over them (triangles in 3D,
+    /// segments in 2D), each vertex carried by the cell around it ([`Embedding`]). From then
+    /// on every step, and every change of the positions, moves it; read it with
+    /// [`render_mesh`](Self::render_mesh). Replaces any render mesh bound before. Errors as
+    /// [`Embedding::bind`]; the body is unchanged then.
+    pub fn set_render_mesh(
+        &mut self,
+        vertices: &[Vector],
+        facets: Vec<[u32; math::FACET_ARITY]>,
+    ) -> Result<(), BuildError> {
+        let mut render = Embedding::bind(&self.rest.mesh, vertices, facets)?;
+        render.update(&self.state.positions);
+        self.render = Some(render);
+        Ok(())
+    }
+
+    /// The render mesh at the current positions, if one is bound.
+    pub fn render_mesh(&self) -> Option<&Embedding> {
+        self.render.as_ref()
+    }
+
+    /// Unbinds the render mesh.
+    pub fn clear_render_mesh(&mut self) {
+        self.render = None;
     }
 
     fn bindings_changed(&mut self) {
