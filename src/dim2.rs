@@ -355,6 +355,34 @@ pub(crate) mod render {
         Ok(())
     }
 
+    /// A render polyline's topology: nothing to log ahead in 2D (each frame sends its strips).
+    pub fn render_mesh_topology(
+        _rec: &RecordingStream,
+        _path: &str,
+        _facets: &[[u32; 2]],
+    ) -> RecordingStreamResult<()> {
+        Ok(())
+    }
+
+    /// A render polyline at one frame: one two-point strip per segment, grey.
+    pub fn render_mesh(
+        rec: &RecordingStream,
+        path: &str,
+        vertices: &[Vector],
+        _normals: &[Vector],
+        facets: &[[u32; 2]],
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &rerun::LineStrips2D::new(
+                facets
+                    .iter()
+                    .map(|f| [p(vertices[f[0] as usize]), p(vertices[f[1] as usize])]),
+            )
+            .with_colors([Color::from_rgb(190, 190, 200)]),
+        )
+    }
+
     /// The surface of one frame: one two-point strip per boundary segment, coloured by the mean
     /// of its two vertices' colours.
     pub fn surface(

@@ -471,6 +471,36 @@ pub(crate) mod render {
         )
     }
 
+    /// A render mesh's triangles, logged once (and again when they change).
+    pub fn render_mesh_topology(
+        rec: &RecordingStream,
+        path: &str,
+        facets: &[[u32; 3]],
+    ) -> RecordingStreamResult<()> {
+        rec.log_static(
+            path,
+            &Mesh3D::update_fields()
+                .with_triangle_indices(facets.iter().copied())
+                .with_albedo_factor(Color::from_rgb(190, 190, 200).0),
+        )
+    }
+
+    /// A render mesh at one frame: its vertices and normals.
+    pub fn render_mesh(
+        rec: &RecordingStream,
+        path: &str,
+        vertices: &[Vector],
+        normals: &[Vector],
+        _facets: &[[u32; 3]],
+    ) -> RecordingStreamResult<()> {
+        rec.log(
+            path,
+            &Mesh3D::update_fields()
+                .with_vertex_positions(vertices.iter().map(|v| p(*v)))
+                .with_vertex_normals(normals.iter().map(|v| p(*v))),
+        )
+    }
+
     /// Points.
     pub fn points(
         rec: &RecordingStream,

@@ -118,6 +118,7 @@ impl Embedding {
     }
 
     /// Whether the embedding is whole and binds to nodes below `nodes` (a snapshot's check).
+    #[cfg(feature = "serde")]
     pub(crate) fn check(&self, nodes: usize) -> Result<(), String> {
         let n = self.vertices.len();
         let counts = [

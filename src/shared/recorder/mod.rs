@@ -11,6 +11,7 @@
 //! |---|---|---|
 //! | `world` | view coordinates (3D: right-handed, y up) | static |
 //! | `world/deformables/<name>/surface` | 3D: `Mesh3D` of the boundary (vertex `j` is node `mesh.boundary_nodes()[j]`), coloured by the chosen field; 2D: `LineStrips2D`, one two-point strip per boundary segment (`mesh.boundary_facets()` order) | every logged frame |
+//! | `world/deformables/<name>/render` | the body's render mesh ([`Deformable::set_render_mesh`]), 3D: `Mesh3D` with its normals, grey; 2D: `LineStrips2D`, one strip per segment | every logged frame while it has one |
 //! | `world/deformables/<name>/nodes` | all nodes as points, coloured by the field | if `nodes` |
 //! | `world/deformables/<name>/edges` | every cell's vertex pairs as segments | if `edges` |
 //! | `world/deformables/<name>/attachments` | segment node → its anchor on the bone | if `attachments` |
@@ -174,6 +175,8 @@ struct DeformableLog {
     pair_start: Vec<u32>,
     pairs: Vec<(u32, Real)>,
     topology_logged: bool,
+    /// The facets of the render mesh last logged (its topology is logged when they change).
+    render_facets: Option<Vec<[u32; FACET_ARITY]>>,
     /// Whether the body was frozen at the last logged frame.
     was_frozen: bool,
     /// Whether the body had bindings at the last logged frame.
@@ -577,6 +580,7 @@ impl DeformableLog {
             pairs,
             pending: Vec::with_capacity(STATS_BATCH),
             topology_logged: false,
+            render_facets: None,
             was_frozen: false,
             bound: false,
         }
@@ -674,6 +678,16 @@ impl DeformableLog {
             .map(|&i| self.color(i as usize, body, options))
             .collect();
         render::surface(rec, &surface_path, &vertices, &self.facets, &colors)?;
+        if let Some(mesh) = body.render_mesh() {
+            let path = format!("{base}/render");
+            if self.render_facets.as_deref() != Some(mesh.facets()) {
+                render::render_mesh_topology(rec, &path, mesh.facets())?;
+                self.render_facets = Some(mesh.facets().to_vec());
+            }
+            render::render_mesh(rec, &path, mesh.vertices(), mesh.normals(), mesh.facets())?;
+        } else if self.render_facets.take().is_some() {
+            rec.log(format!("{base}/render"), &rerun::Clear::recursive())?;
+        }
         if options.blueprint {
             render::focus(rec, &format!("{base}/focus"), &vertices)?;
         }
