@@ -2,7 +2,9 @@
 # Screenshots of the Rerun viewer on the main demo's recordings (README, "Viewing runs in Rerun"):
 # docs/screenshots/fall-impact-3d.png and fall-impact-2d.png, the edge-repulsion runs of
 # `cargo run --release --features rerun --example fall_and_bounce` at the impact frame (the frame
-# of the smallest volume ratio), as the viewer draws them with the layout sinew sends.
+# of the smallest volume ratio), as the viewer draws them with the layout sinew sends; and
+# docs/screenshots/asset.png, the trefoil knot of `--example asset` drawn by its render mesh
+# as its bone lets it go (README, "From your own mesh").
 #
 # The viewer plays a file from its start in simulated time (the layout's time panel) and stops at
 # its end, so the demo runs twice: once whole, to find the impact frame in its recording, then
@@ -75,3 +77,24 @@ image.save(sys.argv[2], optimize=True)
 print(f"wrote {sys.argv[2]} ({image.width}x{image.height})")
 PY
 done
+
+# The asset, cut at 1.6 s: just let go by its bone, its render mesh over its cells.
+cargo build --release --features rerun --example asset
+target/release/examples/asset --rrd "$out/asset" --seconds 1.6 >/dev/null
+png="$out/asset.png"
+RUST_LOG=error timeout 300 xvfb-run -a -s "-screen 0 6400x4000x24" "$venv/bin/rerun" \
+    "$out/asset/torus-knot.rrd" --renderer vulkan \
+    --window-size 1400x860 --screenshot-to "$png" >"$out/viewer-asset.log" 2>&1 || true
+if [ ! -s "$png" ]; then
+    echo "no screenshot; the viewer said:" >&2
+    tail -20 "$out/viewer-asset.log" >&2
+    exit 1
+fi
+"$venv/bin/python" - "$png" "docs/screenshots/asset.png" <<'PY'
+import sys
+from PIL import Image
+image = Image.open(sys.argv[1])
+image = image.resize((image.width // 2, image.height // 2), Image.LANCZOS)
+image.save(sys.argv[2], optimize=True)
+print(f"wrote {sys.argv[2]} ({image.width}x{image.height})")
+PY

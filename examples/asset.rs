@@ -4,8 +4,8 @@
 //! let go onto the ground. 60 Hz, `Integrator::Auto`.
 //!
 //! ```text
-//! cargo run --release --features obj --example asset [-- --cell 0.035 --seconds 4]
-//! cargo run --release --features obj,rerun --example asset [-- --rrd DIR | --connect [ADDR]]
+//! cargo run --release --example asset [-- --cell 0.035 --seconds 4]
+//! cargo run --release --features rerun --example asset [-- --rrd DIR | --connect [ADDR]]
 //! ```
 //!
 //! It prints the mesh, the cost of a step and the cost of moving the render mesh (its share

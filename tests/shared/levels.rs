@@ -114,13 +114,16 @@ fn drop_on(floor: ColliderBuilder, model: ElementModel) -> Record {
         damping_ratio: 0.5,
         ..Default::default()
     };
-    let mut test = DropTest::new(world, mesh, material, model);
-    test.restitution = 0.0;
-    test.seconds = 4.0;
     let mut at = Vector::splat(0.13);
     at[1] = 0.6;
-    test.translation = at;
-    test.run().unwrap()
+    DropTest::new(world, mesh)
+        .material(material)
+        .model(model)
+        .restitution(0.0)
+        .seconds(4.0)
+        .translation(at)
+        .run()
+        .unwrap()
 }
 
 #[test]

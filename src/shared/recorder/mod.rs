@@ -646,6 +646,40 @@ impl DeformableLog {
         }
     }
 
+    /// The cells' quality at this frame: every cell's with `all`, else the surface cells'.
+    fn refresh_quality(&mut self, body: &Deformable, all: bool) {
+        let (mesh, x) = (body.mesh(), body.positions());
+        if all {
+            for (c, q) in self.quality.iter_mut().enumerate() {
+                *q = mesh.cell_quality(c, x);
+            }
+        } else {
+            for &c in &self.surface_cells {
+                self.quality[c as usize] = mesh.cell_quality(c as usize, x);
+            }
+        }
+    }
+
+    /// The body's render mesh, its topology when it changes; cleared when it goes.
+    fn log_render_mesh(
+        &mut self,
+        rec: &RecordingStream,
+        body: &Deformable,
+        base: &str,
+    ) -> Result<(), RecorderError> {
+        let path = format!("{base}/render");
+        if let Some(mesh) = body.render_mesh() {
+            if self.render_facets.as_deref() != Some(mesh.facets()) {
+                render::render_mesh_topology(rec, &path, mesh.facets())?;
+                self.render_facets = Some(mesh.facets().to_vec());
+            }
+            render::render_mesh(rec, &path, mesh.vertices(), mesh.normals(), mesh.facets())?;
+        } else if self.render_facets.take().is_some() {
+            rec.log(path, &rerun::Clear::recursive())?;
+        }
+        Ok(())
+    }
+
     fn log(
         &mut self,
         rec: &RecordingStream,
@@ -660,17 +694,8 @@ impl DeformableLog {
             render::surface_topology(rec, &surface_path, &self.facets)?;
             self.topology_logged = true;
         }
-        let mesh = body.mesh();
+        self.refresh_quality(body, options.nodes);
         let x = body.positions();
-        if options.nodes {
-            for (c, q) in self.quality.iter_mut().enumerate() {
-                *q = mesh.cell_quality(c, x);
-            }
-        } else {
-            for &c in &self.surface_cells {
-                self.quality[c as usize] = mesh.cell_quality(c as usize, x);
-            }
-        }
         let vertices: Vec<Vector> = self.surface.iter().map(|&i| x[i as usize]).collect();
         let colors: Vec<Color> = self
             .surface
@@ -678,16 +703,7 @@ impl DeformableLog {
             .map(|&i| self.color(i as usize, body, options))
             .collect();
         render::surface(rec, &surface_path, &vertices, &self.facets, &colors)?;
-        if let Some(mesh) = body.render_mesh() {
-            let path = format!("{base}/render");
-            if self.render_facets.as_deref() != Some(mesh.facets()) {
-                render::render_mesh_topology(rec, &path, mesh.facets())?;
-                self.render_facets = Some(mesh.facets().to_vec());
-            }
-            render::render_mesh(rec, &path, mesh.vertices(), mesh.normals(), mesh.facets())?;
-        } else if self.render_facets.take().is_some() {
-            rec.log(format!("{base}/render"), &rerun::Clear::recursive())?;
-        }
+        self.log_render_mesh(rec, body, &base)?;
         if options.blueprint {
             render::focus(rec, &format!("{base}/focus"), &vertices)?;
         }

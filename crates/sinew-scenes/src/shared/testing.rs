@@ -11,15 +11,23 @@
 //! let mut world = DeformableWorld::new(); // dt = 1/60 s
 //! world.physics.insert(RigidBodyBuilder::fixed(), ColliderBuilder::cuboid(5.0, 0.1, 5.0));
 //! let mesh = Mesh::cuboid(Vector::splat(0.25), [4; 3], CellKind::Simplex).unwrap();
-//! let material = Material { density: 400.0, young_modulus: 2e4, damping_ratio: 0.5, ..Default::default() };
-//! let mut test = DropTest::new(world, mesh, material, ElementModel::EdgeRepulsion);
-//! (test.translation, test.floor_height, test.seconds) = (Vector::new(0.0, 1.0, 0.0), 0.1, 3.0);
-//! let record = test.run().unwrap();
+//! let record = DropTest::new(world, mesh)
+//!     .material(Material { density: 400.0, young_modulus: 2e4, damping_ratio: 0.5, ..Default::default() })
+//!     .model(ElementModel::EdgeRepulsion)
+//!     .translation(Vector::new(0.0, 1.0, 0.0))
+//!     .floor_height(0.1)
+//!     .seconds(3.0)
+//!     .run()
+//!     .unwrap();
 //! assert_eq!(record.max_inverted_elements, 0);
 //! assert!(record.max_penetration.unwrap() < 1e-3);
 //! // Rests on the floor's top, its centre 1.4 cm lower under its weight (ρ g H²/3E = 1.6 cm).
 //! assert!((record.rest_com.unwrap() - 0.336).abs() < 0.005);
 //! ```
+//!
+//! The mesh may come from a file or an asset: a volume mesh (`sinew::dimN::mesh::io`),
+//! or in 3D a surface (`sinew::dim3::surface`, features `stl`, `obj`, `gltf`) filled by
+//! `Mesh::stuffed`.
 
 use super::super::lib::math::{Real, Vector};
 use super::super::lib::mesh::Mesh;
@@ -28,41 +36,30 @@ use super::sim::{BodySpec, Bounce, Sim};
 use super::subject::Subject;
 use super::Record;
 
-/// One soft body dropped into a world of the user's (see the module docs).
+/// One soft body dropped into a world of the user's (see the module docs), built in rapier's
+/// style: [`DropTest::new`], then what differs from the defaults, then [`DropTest::run`].
 pub struct DropTest {
-    /// The world, with the user's colliders and bodies; its `dt` is the step.
-    pub world: DeformableWorld,
-    /// The body's rest mesh, in body coordinates.
-    pub mesh: Mesh,
-    /// Its material.
-    pub material: Material,
-    /// sinew's model (or rapier's soft body, as a peer).
-    pub subject: Subject,
-    /// Where the mesh's origin goes (default: the origin).
-    pub translation: Vector,
-    /// The body's friction and restitution coefficients (default 0.5 and 0.5).
-    pub friction: Real,
-    /// See `friction`.
-    pub restitution: Real,
-    /// Height of the floor's top, for the penetration and the bounce (default 0).
-    pub floor_height: Real,
-    /// Simulated time, s (default 3).
-    pub seconds: Real,
+    world: DeformableWorld,
+    mesh: Mesh,
+    material: Material,
+    subject: Subject,
+    translation: Vector,
+    friction: Real,
+    restitution: Real,
+    floor_height: Real,
+    seconds: Real,
 }
 
 impl DropTest {
-    /// `mesh` of `material` as `subject`, in `world`, with the defaults above.
-    pub fn new(
-        world: DeformableWorld,
-        mesh: Mesh,
-        material: Material,
-        subject: impl Into<Subject>,
-    ) -> Self {
+    /// `mesh` (its rest shape, in body coordinates) dropped in `world` (the user's colliders
+    /// and bodies; its `dt` is the step). Defaults: [`Material::default`], edge repulsion,
+    /// at the origin, friction and restitution 0.5, the floor's top at 0, 3 s.
+    pub fn new(world: DeformableWorld, mesh: Mesh) -> Self {
         DropTest {
             world,
             mesh,
-            material,
-            subject: subject.into(),
+            material: Material::default(),
+            subject: Subject::Sinew(super::super::lib::ElementModel::EdgeRepulsion),
             translation: Vector::ZERO,
             friction: 0.5,
             restitution: 0.5,
@@ -71,8 +68,50 @@ impl DropTest {
         }
     }
 
+    /// The body's material.
+    pub fn material(mut self, material: Material) -> Self {
+        self.material = material;
+        self
+    }
+
+    /// sinew's element model, or rapier's soft body as a peer (a [`Subject`]).
+    pub fn model(mut self, subject: impl Into<Subject>) -> Self {
+        self.subject = subject.into();
+        self
+    }
+
+    /// Where the mesh's origin goes.
+    pub fn translation(mut self, translation: Vector) -> Self {
+        self.translation = translation;
+        self
+    }
+
+    /// The body's friction coefficient.
+    pub fn friction(mut self, friction: Real) -> Self {
+        self.friction = friction;
+        self
+    }
+
+    /// The body's restitution coefficient.
+    pub fn restitution(mut self, restitution: Real) -> Self {
+        self.restitution = restitution;
+        self
+    }
+
+    /// The height of the floor's top, for the penetration and the bounce.
+    pub fn floor_height(mut self, height: Real) -> Self {
+        self.floor_height = height;
+        self
+    }
+
+    /// Simulated time, s.
+    pub fn seconds(mut self, seconds: Real) -> Self {
+        self.seconds = seconds;
+        self
+    }
+
     /// Runs the drop. The record holds the first bounce's apex and the rest height (centre of
-    /// mass), the deepest node below `floor_height`, inverted cells (most, and at the end),
+    /// mass), the deepest node below the floor's top, inverted cells (most, and at the end),
     /// the smallest volume ratio, the kinetic energy at the end, substeps and wall time.
     pub fn run(self) -> Result<Record, BuildError> {
         let dt = self.world.physics.integration_parameters.dt;
