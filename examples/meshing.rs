@@ -24,52 +24,7 @@ use sinew::dim3::surface::obj;
 use sinew::dim3::{
     CellKind, DeformableBuilder, DeformableWorld, ElementModel, Integrator, Mesh, Surface,
 };
-
-/// A torus of radii `big`, `small` about the y axis, `n` × `m` quads.
-fn torus(big: Real, small: Real, n: usize, m: usize) -> Surface {
-    let tau = std::f64::consts::TAU as Real;
-    let mut v = Vec::new();
-    for i in 0..n {
-        let a = tau * i as Real / n as Real;
-        for j in 0..m {
-            let b = tau * j as Real / m as Real;
-            let r = big + small * b.cos();
-            v.push(Vector::new(r * a.cos(), small * b.sin(), r * a.sin()));
-        }
-    }
-    let id = |i: usize, j: usize| ((i % n) * m + j % m) as u32;
-    let mut t = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            t.extend([[a, d, b], [b, d, c]]);
-        }
-    }
-    Surface::new(v, t).expect("a torus is a closed surface")
-}
-
-/// The outward faces only one cell has.
-fn boundary(mesh: &Mesh) -> Vec<[u32; 3]> {
-    let mut faces: Vec<([u32; 3], [u32; 3])> = Vec::new();
-    for c in mesh.cell_indices().chunks_exact(4) {
-        for f in [
-            [c[1], c[2], c[3]],
-            [c[0], c[3], c[2]],
-            [c[0], c[1], c[3]],
-            [c[0], c[2], c[1]],
-        ] {
-            let mut key = f;
-            key.sort_unstable();
-            faces.push((key, f));
-        }
-    }
-    faces.sort_unstable();
-    faces
-        .chunk_by(|x, y| x.0 == y.0)
-        .filter(|g| g.len() == 1)
-        .map(|g| g[0].1)
-        .collect()
-}
+use sinew_scenes::dim3::meshing::{dihedral_range, torus};
 
 struct Row {
     cells: usize,
@@ -79,36 +34,10 @@ struct Row {
     fall: Option<f64>,
 }
 
-fn dihedrals(mesh: &Mesh) -> (Real, Real) {
-    let x = mesh.nodes();
-    let (mut lo, mut hi): (Real, Real) = (180.0, 0.0);
-    for c in mesh.cell_indices().chunks_exact(4) {
-        let p = [0, 1, 2, 3].map(|k| x[c[k] as usize]);
-        for (i, j, k, l) in [
-            (0, 1, 2, 3),
-            (0, 2, 1, 3),
-            (0, 3, 1, 2),
-            (1, 2, 0, 3),
-            (1, 3, 0, 2),
-            (2, 3, 0, 1),
-        ] {
-            let e = p[j] - p[i];
-            let (n1, n2) = (e.cross(p[k] - p[i]), e.cross(p[l] - p[i]));
-            let a = (n1.dot(n2) / (n1.length() * n2.length()))
-                .clamp(-1.0, 1.0)
-                .acos()
-                .to_degrees();
-            lo = lo.min(a);
-            hi = hi.max(a);
-        }
-    }
-    (lo, hi)
-}
-
 /// Both ways: the boundary's vertices to the shape's surface, and `samples` (points on the
 /// shape's surface) to the boundary.
 fn hausdorff(mesh: &Mesh, shape: &dyn Shape, samples: &[Vector]) -> Real {
-    let faces = boundary(mesh);
+    let faces = mesh.boundary_facets().to_vec();
     let mut out: Real = 0.0;
     for v in faces.iter().flatten() {
         let p = mesh.nodes()[*v as usize];
@@ -155,7 +84,7 @@ fn fall(mesh: &Mesh) -> Option<f64> {
 fn measure(mesh: &Mesh, shape: &dyn Shape, samples: &[Vector], volume: Real) -> Row {
     Row {
         cells: mesh.num_cells(),
-        dihedral: dihedrals(mesh),
+        dihedral: dihedral_range(mesh),
         hausdorff: hausdorff(mesh, shape, samples),
         volume_error: mesh.total_volume() / volume - 1.0,
         fall: fall(mesh),

@@ -20,8 +20,8 @@
 //!
 //! Files store each triangle's corners separately (STL) or repeat a vertex across seams
 //! (normals, texture coordinates): [`Surface::welded`] first merges vertices closer than a
-//! tolerance. The readers ([`stl`], [`obj`], [`gltf`], behind the features of the same names)
-//! weld at 10⁻⁶ of the surface's bounding-box diagonal.
+//! tolerance. The readers ([`stl`], [`obj`], [`gltf`], behind the features of the same names;
+//! `stl` and `obj` on by default) weld at 10⁻⁶ of the surface's bounding-box diagonal.
 
 #[cfg(any(feature = "stl", feature = "obj", feature = "gltf"))]
 mod files;
@@ -135,6 +135,50 @@ pub enum SurfaceError {
     },
 }
 
+impl SurfaceError {
+    /// The error with its triangle numbers mapped through `kept` (the given triangle each
+    /// checked one came from).
+    fn renumbered(self, kept: &[usize]) -> SurfaceError {
+        let back = |t: usize| kept.get(t).copied().unwrap_or(t);
+        match self {
+            SurfaceError::DegenerateTriangle { triangle, vertices } => {
+                SurfaceError::DegenerateTriangle {
+                    triangle: back(triangle),
+                    vertices,
+                }
+            }
+            SurfaceError::OpenEdge { a, b, triangle } => SurfaceError::OpenEdge {
+                a,
+                b,
+                triangle: back(triangle),
+            },
+            SurfaceError::NonManifoldEdge {
+                a,
+                b,
+                triangle,
+                count,
+            } => SurfaceError::NonManifoldEdge {
+                a,
+                b,
+                triangle: back(triangle),
+                count,
+            },
+            SurfaceError::InconsistentWinding {
+                triangle,
+                neighbour,
+                a,
+                b,
+            } => SurfaceError::InconsistentWinding {
+                triangle: back(triangle),
+                neighbour: back(neighbour),
+                a,
+                b,
+            },
+            other => other,
+        }
+    }
+}
+
 /// A closed, manifold, consistently and outwards oriented triangle surface (see the module
 /// documentation for what is checked).
 ///
@@ -181,7 +225,8 @@ impl Surface {
 
     /// [`Surface::new`] after merging the vertices closer than `tolerance` to an earlier one
     /// (0: only identical ones) into it. A triangle two of whose corners merge is dropped
-    /// (a sliver thinner than the tolerance).
+    /// (a sliver thinner than the tolerance, or a zero-area triangle with a repeated corner,
+    /// which CAD exports contain). Errors number triangles and vertices as given.
     pub fn welded(
         vertices: Vec<Vector>,
         triangles: Vec<[u32; 3]>,
@@ -190,14 +235,17 @@ impl Surface {
         if !(tolerance.is_finite() && tolerance >= 0.0) {
             return Err(SurfaceError::InvalidTolerance { value: tolerance });
         }
-        check_input(&vertices, &triangles)?;
+        // Numbers and indices first (the weld reads them); a degenerate triangle may be a
+        // sliver that the weld collapses and drops, so [`Surface::new`] judges it after.
+        check_numbers(&vertices, &triangles)?;
         let map = weld_map(&vertices, tolerance);
-        let welded: Vec<[u32; 3]> = triangles
+        let (kept, welded): (Vec<usize>, Vec<[u32; 3]>) = triangles
             .iter()
             .map(|t| t.map(|i| map[i as usize]))
-            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
-            .collect();
-        Surface::new(vertices, welded)
+            .enumerate()
+            .filter(|(_, t)| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+            .unzip();
+        Surface::new(vertices, welded).map_err(|e| e.renumbered(&kept))
     }
 
     /// The vertices.
@@ -285,8 +333,8 @@ fn bounds(vertices: &[Vector]) -> (Vector, Vector) {
     )
 }
 
-/// Finite vertices, indices in range, no degenerate triangle, enough triangles.
-fn check_input(vertices: &[Vector], triangles: &[[u32; 3]]) -> Result<(), SurfaceError> {
+/// Finite vertices, indices in range.
+fn check_numbers(vertices: &[Vector], triangles: &[[u32; 3]]) -> Result<(), SurfaceError> {
     for (vertex, p) in vertices.iter().enumerate() {
         if !p.is_finite() {
             return Err(SurfaceError::NonFinite {
@@ -305,6 +353,14 @@ fn check_input(vertices: &[Vector], triangles: &[[u32; 3]]) -> Result<(), Surfac
                 });
             }
         }
+    }
+    Ok(())
+}
+
+/// [`check_numbers`], no degenerate triangle, enough triangles.
+fn check_input(vertices: &[Vector], triangles: &[[u32; 3]]) -> Result<(), SurfaceError> {
+    check_numbers(vertices, triangles)?;
+    for (triangle, t) in triangles.iter().enumerate() {
         let c = corners(vertices, t);
         let repeated = t[0] == t[1] || t[1] == t[2] || t[2] == t[0];
         // No area, to the precision of the coordinates.

@@ -8,6 +8,7 @@
 use sinew::dim3::math::{Real, Vector};
 use sinew::dim3::rapier::parry::shape::{Ball, Capsule, Shape};
 use sinew::dim3::{BuildError, Mesh, Surface};
+use sinew_scenes::dim3::meshing::{dihedral_range, torus};
 
 /// What a stuffed mesh measures.
 #[derive(Debug)]
@@ -20,54 +21,10 @@ struct Quality {
     off_surface: Real,
 }
 
-/// The faces of `mesh` that only one cell has, wound outwards.
-fn boundary(mesh: &Mesh) -> Vec<[u32; 3]> {
-    let mut faces: Vec<([u32; 3], [u32; 3])> = Vec::new();
-    for c in mesh.cell_indices().chunks_exact(4) {
-        // Outward for a positive tetrahedron (a, b, c, d).
-        for f in [
-            [c[1], c[2], c[3]],
-            [c[0], c[3], c[2]],
-            [c[0], c[1], c[3]],
-            [c[0], c[2], c[1]],
-        ] {
-            let mut key = f;
-            key.sort_unstable();
-            faces.push((key, f));
-        }
-    }
-    faces.sort_unstable();
-    faces
-        .chunk_by(|x, y| x.0 == y.0)
-        .filter(|g| g.len() == 1)
-        .map(|g| g[0].1)
-        .collect()
-}
-
 fn measure(mesh: &Mesh, shape: &dyn Shape) -> Quality {
     let x = mesh.nodes();
-    let (mut lo, mut hi): (Real, Real) = (180.0, 0.0);
-    for c in mesh.cell_indices().chunks_exact(4) {
-        let p = [0, 1, 2, 3].map(|k| x[c[k] as usize]);
-        for (i, j, k, l) in [
-            (0, 1, 2, 3),
-            (0, 2, 1, 3),
-            (0, 3, 1, 2),
-            (1, 2, 0, 3),
-            (1, 3, 0, 2),
-            (2, 3, 0, 1),
-        ] {
-            let e = p[j] - p[i];
-            let (n1, n2) = (e.cross(p[k] - p[i]), e.cross(p[l] - p[i]));
-            let angle = (n1.dot(n2) / (n1.length() * n2.length()))
-                .clamp(-1.0, 1.0)
-                .acos()
-                .to_degrees();
-            lo = lo.min(angle);
-            hi = hi.max(angle);
-        }
-    }
-    let faces = boundary(mesh);
+    let (lo, hi) = dihedral_range(mesh);
+    let faces = mesh.boundary_facets().to_vec();
     let surface = Surface::new(x.to_vec(), faces.clone())
         .unwrap_or_else(|e| panic!("the boundary is not a closed manifold: {e}"));
     let mut off: Real = 0.0;
@@ -99,29 +56,6 @@ fn check(name: &str, shape: &dyn Shape, volume: Real, cell: Real) -> Quality {
     );
     assert!(q.off_surface <= 0.01 * cell, "{name}: {q:?}");
     q
-}
-
-/// A torus of radii `big` and `small` about the y axis, `n` × `m` flat quads.
-fn torus(big: Real, small: Real, n: usize, m: usize) -> Surface {
-    let tau = std::f64::consts::TAU as Real;
-    let mut v = Vec::new();
-    for i in 0..n {
-        let a = tau * i as Real / n as Real;
-        for j in 0..m {
-            let b = tau * j as Real / m as Real;
-            let r = big + small * b.cos();
-            v.push(Vector::new(r * a.cos(), small * b.sin(), r * a.sin()));
-        }
-    }
-    let mut t = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            let id = |i: usize, j: usize| ((i % n) * m + j % m) as u32;
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            t.extend([[a, d, b], [b, d, c]]);
-        }
-    }
-    Surface::new(v, t).unwrap()
 }
 
 #[test]

@@ -189,6 +189,23 @@ fn welding_joins_a_triangle_soup() {
     ));
     let s = Surface::welded(soup.clone(), tris.clone(), 1e-5).unwrap();
     assert_eq!((s.vertices().len(), s.triangles().len()), (8, 12));
+    // A zero-area triangle with a repeated corner, as CAD exports hold, first in the list: the
+    // weld drops it, and an error after names the triangles as given.
+    let mut with_sliver = vec![[0, 0, 1]];
+    with_sliver.extend(&tris);
+    let s = Surface::welded(soup.clone(), with_sliver.clone(), 1e-5).unwrap();
+    assert_eq!(s.triangles().len(), 12);
+    with_sliver[8].swap(1, 2);
+    let e = Surface::welded(soup.clone(), with_sliver, 1e-5).unwrap_err();
+    let SurfaceError::InconsistentWinding {
+        triangle,
+        neighbour,
+        ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert!(triangle == 8 || neighbour == 8, "{e}");
     assert!(matches!(
         Surface::welded(soup, tris, -1.0),
         Err(SurfaceError::InvalidTolerance { .. })
@@ -493,6 +510,17 @@ mod gltf {
         let e = gltf::read_bytes(lines.as_bytes()).unwrap_err();
         assert!(matches!(e, SurfaceReadError::Unsupported { .. }), "{e:?}");
         assert!(e.to_string().contains("mesh 0 primitive 0"), "{e}");
+        // A node that is its own child: refused, not followed forever.
+        let cycle = text.replace("\"mesh\": 0,", "\"mesh\": 0, \"children\": [0],");
+        assert_ne!(cycle, text);
+        let e = gltf::read_bytes(cycle.as_bytes()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                SurfaceReadError::Unsupported { .. } | SurfaceReadError::Parse { .. }
+            ),
+            "{e:?}"
+        );
         // Not JSON.
         let e = gltf::read_bytes(b"{ not json").unwrap_err();
         assert!(matches!(e, SurfaceReadError::Parse { .. }), "{e:?}");

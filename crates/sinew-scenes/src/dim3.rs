@@ -53,3 +53,61 @@ pub(crate) mod level {
         ColliderBuilder::trimesh(vertices, indices).expect("a valid ramp")
     }
 }
+
+/// Shapes and measures for tetrahedral meshes of users' surfaces (the stuffing tests and the
+/// `meshing` example).
+pub mod meshing {
+    use sinew::dim3::math::{Real, Vector};
+    use sinew::dim3::{Mesh, Surface};
+
+    /// A torus of radii `big` and `small` about the y axis, `n` × `m` flat quads.
+    pub fn torus(big: Real, small: Real, n: usize, m: usize) -> Surface {
+        let tau = std::f64::consts::TAU as Real;
+        let mut v = Vec::new();
+        for i in 0..n {
+            let a = tau * i as Real / n as Real;
+            for j in 0..m {
+                let b = tau * j as Real / m as Real;
+                let r = big + small * b.cos();
+                v.push(Vector::new(r * a.cos(), small * b.sin(), r * a.sin()));
+            }
+        }
+        let id = |i: usize, j: usize| ((i % n) * m + j % m) as u32;
+        let mut t = Vec::new();
+        for i in 0..n {
+            for j in 0..m {
+                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                t.extend([[a, d, b], [b, d, c]]);
+            }
+        }
+        Surface::new(v, t).expect("a torus is a closed surface")
+    }
+
+    /// The smallest and the largest dihedral angle of the mesh's tetrahedra, in degrees.
+    pub fn dihedral_range(mesh: &Mesh) -> (Real, Real) {
+        let x = mesh.nodes();
+        let (mut lo, mut hi): (Real, Real) = (180.0, 0.0);
+        for c in mesh.cell_indices().chunks_exact(4) {
+            let p = [0, 1, 2, 3].map(|k| x[c[k] as usize]);
+            for (i, j, k, l) in [
+                (0, 1, 2, 3),
+                (0, 2, 1, 3),
+                (0, 3, 1, 2),
+                (1, 2, 0, 3),
+                (1, 3, 0, 2),
+                (2, 3, 0, 1),
+            ] {
+                // The angle between the half-planes through edge ij that hold k and l.
+                let e = p[j] - p[i];
+                let (n1, n2) = (e.cross(p[k] - p[i]), e.cross(p[l] - p[i]));
+                let angle = (n1.dot(n2) / (n1.length() * n2.length()))
+                    .clamp(-1.0, 1.0)
+                    .acos()
+                    .to_degrees();
+                lo = lo.min(angle);
+                hi = hi.max(angle);
+            }
+        }
+        (lo, hi)
+    }
+}

@@ -220,7 +220,16 @@ pub mod gltf {
         {
             Some(scene) => {
                 let mut stack: Vec<_> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+                // Nodes form trees (one parent each); a node met twice is a cycle or a shared
+                // child, which the format forbids.
+                let mut seen = vec![false; gltf.document.nodes().len()];
                 while let Some((node, parent)) = stack.pop() {
+                    if std::mem::replace(&mut seen[node.index()], true) {
+                        return Err(unsupported(format!(
+                            "node {} is reached twice (a cycle, or a node with two parents)",
+                            node.index()
+                        )));
+                    }
                     let to_world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
                     if let Some(mesh) = node.mesh() {
                         add(mesh, to_world).map_err(&unsupported)?;
