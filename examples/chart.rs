@@ -17,7 +17,8 @@
 //! Writes `<out>/charts/<metric>.svg`, every point as JSON lines in
 //! `<out>/charts/points.jsonl`, and `<out>/ACCURACY.md` (the Pareto-best points per metric and
 //! the commands); with the default `--out docs` and every metric it also refreshes the Pareto
-//! tables in `README.md` between its `chart:pareto` markers. Every point comes from this run.
+//! tables in `docs/PERFORMANCE.md` between its `chart:pareto` markers. Every point comes from
+//! this run.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -998,13 +999,14 @@ fn run_sweeps(
     Ok(())
 }
 
-/// Replaces the README's text between `<!-- chart:pareto:start -->` and
+/// Replaces `docs/PERFORMANCE.md`'s text between `<!-- chart:pareto:start -->` and
 /// `<!-- chart:pareto:end -->` with this run's Pareto tables, one per chart.
 fn refresh_readme(table: &str) -> Result<(), Box<dyn std::error::Error>> {
     let (start, end) = ("<!-- chart:pareto:start -->", "<!-- chart:pareto:end -->");
-    let readme = std::fs::read_to_string("README.md")?;
+    let page = "docs/PERFORMANCE.md";
+    let readme = std::fs::read_to_string(page)?;
     let (Some(a), Some(b)) = (readme.find(start), readme.find(end)) else {
-        eprintln!("README.md has no chart:pareto markers; not updated");
+        eprintln!("{page} has no chart:pareto markers; not updated");
         return Ok(());
     };
     let updated = format!(
@@ -1014,6 +1016,6 @@ fn refresh_readme(table: &str) -> Result<(), Box<dyn std::error::Error>> {
         table,
         &readme[b..]
     );
-    std::fs::write("README.md", updated)?;
+    std::fs::write(page, updated)?;
     Ok(())
 }
