@@ -79,7 +79,7 @@ fn main() {
         .insert_body(RigidBodyBuilder::kinematic_position_based().translation(top));
     let grip = world
         .physics
-        .insert_collider(ColliderBuilder::ball(0.03).sensor(true), Some(bone));
+        .insert_collider(ColliderBuilder::ball(0.06).sensor(true), Some(bone));
     let bound = {
         let physics = &world.physics;
         world.deformables[h]
