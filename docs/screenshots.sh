@@ -28,6 +28,32 @@ rm -rf "$out"
 mkdir -p "$out" docs/screenshots
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 
+# shoot RRD NAME: the viewer's screenshot of recording RRD, halved, to docs/screenshots/NAME.png.
+shoot() {
+    local rrd="$1" name="$2" png="$out/$2.png"
+    # The viewer saves the screenshot, then may exit non-zero on its way out; the file decides.
+    # The screen is larger than the window so that Xvfb's pointer (at the screen's centre) is
+    # not over the window, where it would open a hover tooltip.
+    # RUST_LOG=error: no notification toasts (Docker, software rasterizer) over the plots.
+    RUST_LOG=error timeout 300 xvfb-run -a -s "-screen 0 6400x4000x24" "$venv/bin/rerun" \
+        "$rrd" --renderer vulkan \
+        --window-size 1400x860 --screenshot-to "$png" >"$out/viewer-$name.log" 2>&1 || true
+    if [ ! -s "$png" ]; then
+        echo "no screenshot; the viewer said:" >&2
+        tail -20 "$out/viewer-$name.log" >&2
+        exit 1
+    fi
+    # Half size for the repository (the viewer renders at twice the window's points).
+    "$venv/bin/python" - "$png" "docs/screenshots/$name.png" <<'PY'
+import sys
+from PIL import Image
+image = Image.open(sys.argv[1])
+image = image.resize((image.width // 2, image.height // 2), Image.LANCZOS)
+image.save(sys.argv[2], optimize=True)
+print(f"wrote {sys.argv[2]} ({image.width}x{image.height})")
+PY
+}
+
 cargo build --release --features rerun --example fall_and_bounce
 demo=target/release/examples/fall_and_bounce
 "$demo" --rrd "$out/whole" >/dev/null
@@ -54,47 +80,10 @@ print(f"impact at step {best[0]}: smallest volume ratio {best[1]:.3f}", file=sys
 PY
 )
     "$demo" --rrd "$out/impact-$dim" --seconds "$seconds" >/dev/null
-    png="$out/fall-impact-$dim.png"
-    # The viewer saves the screenshot, then may exit non-zero on its way out; the file decides.
-    # The screen is larger than the window so that Xvfb's pointer (at the screen's centre) is
-    # not over the window, where it would open a hover tooltip.
-    # RUST_LOG=error: no notification toasts (Docker, software rasterizer) over the plots.
-    RUST_LOG=error timeout 300 xvfb-run -a -s "-screen 0 6400x4000x24" "$venv/bin/rerun" \
-        "$out/impact-$dim/$dim-edge-repulsion.rrd" --renderer vulkan \
-        --window-size 1400x860 --screenshot-to "$png" >"$out/viewer-$dim.log" 2>&1 || true
-    if [ ! -s "$png" ]; then
-        echo "no screenshot; the viewer said:" >&2
-        tail -20 "$out/viewer-$dim.log" >&2
-        exit 1
-    fi
-    # Half size for the repository (the viewer renders at twice the window's points).
-    "$venv/bin/python" - "$png" "docs/screenshots/fall-impact-$dim.png" <<'PY'
-import sys
-from PIL import Image
-image = Image.open(sys.argv[1])
-image = image.resize((image.width // 2, image.height // 2), Image.LANCZOS)
-image.save(sys.argv[2], optimize=True)
-print(f"wrote {sys.argv[2]} ({image.width}x{image.height})")
-PY
+    shoot "$out/impact-$dim/$dim-edge-repulsion.rrd" "fall-impact-$dim"
 done
 
 # The asset, cut at 1.6 s: just let go by its bone, its render mesh over its cells.
 cargo build --release --features rerun --example asset
 target/release/examples/asset --rrd "$out/asset" --seconds 1.6 >/dev/null
-png="$out/asset.png"
-RUST_LOG=error timeout 300 xvfb-run -a -s "-screen 0 6400x4000x24" "$venv/bin/rerun" \
-    "$out/asset/torus-knot.rrd" --renderer vulkan \
-    --window-size 1400x860 --screenshot-to "$png" >"$out/viewer-asset.log" 2>&1 || true
-if [ ! -s "$png" ]; then
-    echo "no screenshot; the viewer said:" >&2
-    tail -20 "$out/viewer-asset.log" >&2
-    exit 1
-fi
-"$venv/bin/python" - "$png" "docs/screenshots/asset.png" <<'PY'
-import sys
-from PIL import Image
-image = Image.open(sys.argv[1])
-image = image.resize((image.width // 2, image.height // 2), Image.LANCZOS)
-image.save(sys.argv[2], optimize=True)
-print(f"wrote {sys.argv[2]} ({image.width}x{image.height})")
-PY
+shoot "$out/asset/torus-knot.rrd" asset
