@@ -75,3 +75,6 @@ mod surface;
 
 #[path = "only3d/stuffing.rs"]
 mod stuffing;
+
+#[path = "only3d/gripper.rs"]
+mod gripper;

@@ -6,6 +6,8 @@ use sinew::dim3 as lib;
 mod shared;
 pub use shared::*;
 
+pub mod gripper;
+
 /// Level geometry whose construction differs per dimension.
 pub(crate) mod level {
     use sinew::dim3::math::{Real, Vector};
