@@ -55,11 +55,27 @@ fn a_robot_the_scene_cannot_drive_is_an_error_naming_what() {
     let dir = std::env::temp_dir().join(format!("sinew-gripper-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let original = std::fs::read_to_string(GripperScene::default().urdf).unwrap();
-    let cases: [(&str, String, &str); 3] = [
+    // The left pad link without its collision shape (and its inertia).
+    let bare_pad = {
+        let start = original.find("<link name=\"left_pad\">").unwrap();
+        let end = start + original[start..].find("</link>").unwrap();
+        format!(
+            "{}<link name=\"left_pad\">{}",
+            &original[..start],
+            &original[end..]
+        )
+    };
+    let cases: [(&str, String, &str); 5] = [
         (
             "no-pad.urdf",
             original.replace("right_pad", "right_tip"),
             "right_pad",
+        ),
+        ("bare-pad.urdf", bare_pad, "left_pad"),
+        (
+            "turned.urdf",
+            original.replacen("rpy=\"0 0 0\"", "rpy=\"0 0 0.3\"", 1),
+            "lift",
         ),
         (
             "revolute.urdf",

@@ -176,14 +176,24 @@ impl GripperScene {
                 .ok_or_else(|| format!("no link {name} in {}", self.urdf.display()))
         };
 
-        // Every link that a joint moves becomes kinematic. This gripper's joints are prismatic
-        // or fixed, so a link's offset from where it was built is the sum of its prismatic
-        // ancestors' displacements along their axes.
+        // Every link that a joint moves becomes kinematic. The joints driven here are prismatic
+        // or fixed and their frames unturned, so a link's offset from where it was built is the
+        // sum of its prismatic ancestors' displacements along their axes.
         let mut chains = Vec::new();
         for (name, l) in names.iter().zip(&handles.links) {
             let mut chain = Vec::new();
             let mut child = name.as_str();
-            while let Some(j) = urdf.joints.iter().find(|j| j.child.link == child) {
+            // A chain longer than the joints would be a cycle.
+            for _ in 0..=urdf.joints.len() {
+                let Some(j) = urdf.joints.iter().find(|j| j.child.link == child) else {
+                    break;
+                };
+                if j.origin.rpy.iter().any(|a| *a != 0.0) {
+                    return Err(format!(
+                        "joint {}: a turned frame is not driven here",
+                        j.name
+                    ));
+                }
                 match &j.joint_type {
                     urdf_rs::JointType::Prismatic => {
                         let a = j.axis.xyz;
@@ -210,8 +220,13 @@ impl GripperScene {
         // touches it; the rigid shape it replaces goes.
         let mut pads = Vec::new();
         for side in ["left", "right"] {
-            let pad_collider = link(&format!("{side}_pad"))?.colliders[0].handle;
-            let finger_collider = link(&format!("{side}_finger"))?.colliders[0].handle;
+            let collider = |name: String| {
+                let c = link(&name)?.colliders.first();
+                c.map(|c| c.handle)
+                    .ok_or_else(|| format!("link {name} has no collision shape"))
+            };
+            let pad_collider = collider(format!("{side}_pad"))?;
+            let finger_collider = collider(format!("{side}_finger"))?;
             let (shape, pose) = {
                 let c = &world.physics.colliders[pad_collider];
                 (c.shared_shape().clone(), *c.position())
