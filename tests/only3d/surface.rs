@@ -521,6 +521,32 @@ mod gltf {
             ),
             "{e:?}"
         );
+        // A position accessor past the accessors (panicked inside `gltf`'s validation; found
+        // by the fuzz target).
+        let missing = text.replace("\"POSITION\": 0", "\"POSITION\": 7");
+        assert_ne!(missing, text);
+        let e = gltf::read_bytes(missing.as_bytes()).unwrap_err();
+        assert!(matches!(e, SurfaceReadError::Parse { .. }), "{e:?}");
+        assert!(
+            e.to_string().contains("mesh 0 primitive 0: accessor 7"),
+            "{e}"
+        );
+        // Positions as two floats (the reader would read them as three).
+        let flat = text.replacen("\"type\": \"VEC3\"", "\"type\": \"VEC2\"", 1);
+        assert_ne!(flat, text);
+        let e = gltf::read_bytes(flat.as_bytes()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                SurfaceReadError::Unsupported { .. } | SurfaceReadError::Parse { .. }
+            ),
+            "{e:?}"
+        );
+        // A GLB declaring itself shorter than its header (an overflow inside `gltf`).
+        let mut glb = std::fs::read(fixture("torus.glb")).unwrap();
+        glb[8..12].copy_from_slice(&4u32.to_le_bytes());
+        let e = gltf::read_bytes(&glb).unwrap_err();
+        assert!(matches!(e, SurfaceReadError::Parse { .. }), "{e:?}");
         // Not JSON.
         let e = gltf::read_bytes(b"{ not json").unwrap_err();
         assert!(matches!(e, SurfaceReadError::Parse { .. }), "{e:?}");

@@ -185,10 +185,42 @@ pub mod gltf {
     }
 
     fn parse(bytes: &[u8], dir: Option<&Path>, file: &str) -> Result<Surface, SurfaceReadError> {
-        let gltf = Gltf::from_slice(bytes).map_err(|e| SurfaceReadError::Parse {
+        let parse_error = |message: String| SurfaceReadError::Parse {
             file: file.into(),
-            message: e.to_string(),
-        })?;
+            message,
+        };
+        // `gltf` takes the 12-byte header off a GLB's declared length unchecked (an overflow).
+        if let Some(length) = bytes.strip_prefix(b"glTF").and_then(|b| b.get(4..8)) {
+            let length = u32::from_le_bytes([length[0], length[1], length[2], length[3]]);
+            if length < 12 {
+                return Err(parse_error(format!(
+                    "GLB length {length}, shorter than its header"
+                )));
+            }
+        }
+        let raw =
+            Gltf::from_slice_without_validation(bytes).map_err(|e| parse_error(e.to_string()))?;
+        // `gltf`'s validation reads each primitive's POSITION accessor before it checks that
+        // accessor's index (an index past the accessors panicked inside it): checked first.
+        let json = raw.document.into_json();
+        for (m, mesh) in json.meshes.iter().enumerate() {
+            for (p, primitive) in mesh.primitives.iter().enumerate() {
+                for accessor in primitive.attributes.values() {
+                    if accessor.value() >= json.accessors.len() {
+                        return Err(parse_error(format!(
+                            "mesh {m} primitive {p}: accessor {} of {}",
+                            accessor.value(),
+                            json.accessors.len()
+                        )));
+                    }
+                }
+            }
+        }
+        let document = ::gltf::Document::from_json(json).map_err(|e| parse_error(e.to_string()))?;
+        let gltf = Gltf {
+            document,
+            blob: raw.blob,
+        };
         let unsupported = |what: String| SurfaceReadError::Unsupported {
             file: file.into(),
             what,
@@ -277,8 +309,8 @@ pub mod gltf {
         }
     }
 
-    /// Whether `accessor` lies within its view and the view within its buffer's `data`
-    /// (the `gltf` reader assumes so), and is not sparse.
+    /// Whether `accessor` lies within its view and the view within its buffer's `data`, its
+    /// stride holds an element (the `gltf` reader assumes both), and it is not sparse.
     fn accessor_fits(accessor: &::gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> bool {
         let Some(view) = accessor.view() else {
             return false;
@@ -286,6 +318,9 @@ pub mod gltf {
         let count = accessor.count();
         let size = accessor.size();
         let stride = view.stride().unwrap_or(size);
+        if stride < size {
+            return false;
+        }
         let end = count
             .checked_sub(1)
             .and_then(|c| c.checked_mul(stride))
@@ -312,6 +347,19 @@ pub mod gltf {
         let position = primitive
             .get(&::gltf::Semantic::Positions)
             .ok_or(format!("{at} has no positions"))?;
+        // The reader takes positions as three `f32`s and indices as unsigned scalars.
+        use ::gltf::accessor::{DataType, Dimensions};
+        let typed = position.dimensions() == Dimensions::Vec3
+            && position.data_type() == DataType::F32
+            && primitive.indices().is_none_or(|i| {
+                i.dimensions() == Dimensions::Scalar
+                    && matches!(i.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
+            });
+        if !typed {
+            return Err(format!(
+                "{at}: positions not three floats or indices not unsigned integers"
+            ));
+        }
         let fits = std::iter::once(&position)
             .chain(primitive.indices().as_ref())
             .all(|a| accessor_fits(a, buffers));
