@@ -91,25 +91,12 @@ fn main() {
     let sink = sink::from_args("asset");
     #[cfg(feature = "rerun")]
     let mut recorder = {
-        use sinew::dim3::{RecorderOptions, RerunRecorder};
-        let options = RecorderOptions {
+        let options = sinew::dim3::RecorderOptions {
             every_n_steps: 1,
             attachments: true,
             ..Default::default()
         };
-        let made = match &sink {
-            sink::Sink::Folder(dir) => {
-                RerunRecorder::save("sinew-asset", dir.join("torus-knot.rrd"), options).map(Some)
-            }
-            sink::Sink::Connect(addr) => {
-                RerunRecorder::connect("sinew-asset", addr.as_deref(), options).map(Some)
-            }
-            sink::Sink::Off => Ok(None),
-        };
-        made.unwrap_or_else(|e| {
-            eprintln!("not logging: {e}");
-            None
-        })
+        sink::recorder_3d(&sink, "sinew-asset", "torus-knot.rrd", options)
     };
 
     let steps = (seconds / dt).round() as usize;

@@ -89,3 +89,24 @@ pub fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
 pub fn flag(name: &str) -> bool {
     std::env::args().any(|a| a == name)
 }
+
+/// A 3D recorder for `sink`: application `app`, saved as `file` in a folder sink; `None` (and a
+/// message) when the sink is off or the recorder cannot start.
+#[cfg(feature = "rerun")]
+pub fn recorder_3d(
+    sink: &Sink,
+    app: &'static str,
+    file: &str,
+    options: sinew::dim3::RecorderOptions,
+) -> Option<sinew::dim3::RerunRecorder> {
+    use sinew::dim3::RerunRecorder;
+    let made = match sink {
+        Sink::Folder(dir) => RerunRecorder::save(app, dir.join(file), options).map(Some),
+        Sink::Connect(addr) => RerunRecorder::connect(app, addr.as_deref(), options).map(Some),
+        Sink::Off => Ok(None),
+    };
+    made.unwrap_or_else(|e| {
+        eprintln!("not logging: {e}");
+        None
+    })
+}
