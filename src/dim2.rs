@@ -34,6 +34,11 @@ pub mod math {
         r.perp() * w
     }
 
+    /// The unit vector along the line across unit `normal`, and zero (the line has one).
+    pub fn tangents(normal: Vector) -> [Vector; 2] {
+        [normal.perp(), Vector::ZERO]
+    }
+
     /// Magnitude of an angular quantity.
     #[inline]
     pub fn ang_norm(w: AngVector) -> Real {

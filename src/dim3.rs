@@ -35,6 +35,12 @@ pub mod math {
         w.cross(r)
     }
 
+    /// Two unit vectors spanning the plane across unit `normal`.
+    pub fn tangents(normal: Vector) -> [Vector; 2] {
+        let (a, b) = normal.any_orthonormal_pair();
+        [a, b]
+    }
+
     /// Magnitude of an angular vector.
     #[inline]
     pub fn ang_norm(w: AngVector) -> Real {

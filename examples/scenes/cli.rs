@@ -182,6 +182,10 @@ pub struct Args {
     /// (`DeformableBuilder::deformation_damping`, default 0).
     #[arg(long)]
     pub deformation_damping: Option<f64>,
+    /// Tower, pile: sinew's deformables resting on each other do not damp their motion against
+    /// each other (`PipelineSettings::damp_held` off).
+    #[arg(long)]
+    pub no_damp_held: bool,
     /// `advise`: the smallest cell volume ratio allowed (default 0: no inverted cell).
     #[arg(long)]
     pub min_volume: Option<f64>,
@@ -904,6 +908,7 @@ macro_rules! dimension_runner {
                                     resolution: args.res.unwrap_or(d.resolution),
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
                                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),
+                                    damp_held: !args.no_damp_held,
                                     ..d
                                 };
                                 let run = format!("{name} {bodies} bodies");
@@ -927,6 +932,7 @@ macro_rules! dimension_runner {
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
                                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                     material: material(args, d.material),
+                                    damp_held: !args.no_damp_held,
                                     ..d
                                 };
                                 let run = format!("{name} {bodies} bodies");

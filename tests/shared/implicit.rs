@@ -226,19 +226,20 @@ fn shape_matched_deformables_that_meet_are_solved_together_under_the_implicit_se
     // four sweeps the soft stack still rocks at up to 9 cm/s after the default four, and with
     // two at 6 cm/s after six once its landing is taken again in shorter substeps
     // (`pipeline/guard.rs`).
-    let run = |integrator| {
+    let run = |integrator, seconds| {
         StackScene {
             subject: Subject::Sinew(ElementModel::SHAPE_MATCHING),
             integrator,
-            seconds: 8.0,
+            seconds,
             ..Default::default()
         }
         .run()
         .unwrap()
     };
-    let explicit = run(Integrator::Explicit);
+    // The explicit step's substeps over the landing, before the stack sleeps.
+    let explicit = run(Integrator::Explicit, 1.0);
     for iterations in [2, 10] {
-        let implicit = run(Integrator::Implicit { iterations });
+        let implicit = run(Integrator::Implicit { iterations }, 8.0);
         assert!(!implicit.failed, "{iterations}: {:?}", implicit.failure);
         assert!(
             implicit.substeps * 5.0 < explicit.substeps,
@@ -246,8 +247,10 @@ fn shape_matched_deformables_that_meet_are_solved_together_under_the_implicit_se
             implicit.substeps,
             explicit.substeps
         );
+        // 1.04 mm with two sweeps (0.2 % of the cube) since resting bodies damp their motion
+        // against each other (`PipelineSettings::damp_held`), under 1 mm without.
         let inside = implicit.rest_interpenetration.unwrap();
-        assert!(inside < 1e-3, "{iterations}: {inside} m inside at rest");
+        assert!(inside < 1.5e-3, "{iterations}: {inside} m inside at rest");
         let speed = implicit.final_speed.unwrap();
         assert!(speed < 1e-3, "{iterations}: still moves at {speed} m/s");
         let gain = implicit.energy_gain.unwrap();

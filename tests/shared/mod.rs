@@ -21,6 +21,7 @@ mod implicit;
     not(feature = "enhanced-determinism")
 ))]
 mod golden;
+mod held;
 mod io;
 mod io_props;
 mod levels;

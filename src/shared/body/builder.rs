@@ -165,10 +165,8 @@ impl DeformableBuilder {
     /// momentum, so a fall, a throw or a spin go on undamped. The material's damping ratio
     /// damps each element's own oscillation and the body's slow modes far less
     /// ([`Material::damping_ratio`]); this reaches them. It does not damp bodies moving
-    /// against each other: a tower of cubes dropped on each other lands nearer its axis (2D,
-    /// 1 ms, shape matching: 10 cm off undamped, 3 cm at 100 per second), but the tower's sway,
-    /// each cube rocking whole on the one below, goes on (`scenes tower --gap 0.1
-    /// --deformation-damping 100`).
+    /// against each other (a tower's sway, each cube rocking whole on the one below): that is
+    /// [`PipelineSettings::damp_held`](super::super::PipelineSettings::damp_held)'s, on by default.
     pub fn deformation_damping(mut self, rate: Real) -> Self {
         self.deformation_damping = rate;
         self

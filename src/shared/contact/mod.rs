@@ -131,6 +131,30 @@ pub(crate) fn normal_target(
 
 /// An accumulated friction impulse kept in Coulomb's disc: at most `limit` (`μ` times the
 /// accumulated normal impulse) long.
+/// How a contact between two deformables ended its solve: its push (impulse or force, never
+/// zero) along `normal`.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Grip {
+    pub normal: Vector,
+    pub push: Real,
+}
+
+impl Grip {
+    /// The grip of a contact pushing by `push` along `normal`, `None` when it does not push.
+    pub fn of(normal: Vector, push: Real) -> Option<Grip> {
+        (push > 0.0).then_some(Grip { normal, push })
+    }
+}
+
+/// A contact of one of an island member's nodes with another member's facet, as the last
+/// substep ended it: the other member, the node's position, and the contact's grip.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Held {
+    pub other: usize,
+    pub point: Vector,
+    pub grip: Grip,
+}
+
 pub(crate) fn coulomb(total: Vector, limit: Real) -> Vector {
     let len = total.length();
     if len > limit {

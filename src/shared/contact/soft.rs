@@ -620,6 +620,11 @@ impl SoftRow {
         impulse
     }
 
+    /// How the row held after its solves ([`Grip`](super::Grip)).
+    pub fn grip(&self) -> Option<super::Grip> {
+        super::Grip::of(self.normal, self.normal_impulse)
+    }
+
     /// Whether the impulse of a first [`SoftRow::solve`] would move a still side faster than
     /// `speed` (then that body wakes for the next step): `(node side, facet side)`.
     pub fn wakes(

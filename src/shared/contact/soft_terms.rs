@@ -199,6 +199,11 @@ impl Term {
         self.lambda > 0.0
     }
 
+    /// How the term held at the end of the island's solve ([`Grip`](super::Grip)).
+    pub fn grip(&self) -> Option<super::Grip> {
+        super::Grip::of(self.normal, self.lambda)
+    }
+
     /// The push over a step of `h` on a still side: the speed it would give that side's
     /// lightest node of inverse mass `inv_mass`.
     pub fn speed_given(&self, h: Real, inv_mass: Real) -> Real {

@@ -5,7 +5,7 @@ use super::super::attach::{self, DrivenNodes};
 use super::super::body::Deformable;
 use super::super::contact::soft::{self, NearFacets};
 use super::super::contact::soft_terms;
-use super::super::contact::{self, Contact, FacetMotion, FacetSlack, FreeNode};
+use super::super::contact::{self, Contact, FacetMotion, FacetSlack, FreeNode, Held};
 use super::super::coupling::{self, BodyMotion, Substep};
 use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
 use super::super::math::{self, AngVector, Real, Vector, FACET_ARITY};
@@ -91,6 +91,8 @@ pub(super) struct Member<'m, 'a> {
     /// This substep's node contacts with fixed and kinematic colliders, under the implicit
     /// step (the body's rigid motion answers them first, [`contact::rigid_answer`]).
     pub fixed_rows: Vec<Contact>,
+    /// This substep's contacts of its nodes with other members' facets, as they ended it.
+    pub held: Vec<Held>,
     /// Whether another deformable may push a dynamic body it may push.
     pub shares_bodies: bool,
 }
@@ -116,6 +118,9 @@ pub(super) fn run(
     let mut t = 0.0;
     let mut substeps = 0;
     while let Some(h) = next_substep(integrator, members, &live, ctx, dt - t, substeps) {
+        for m in members.iter_mut() {
+            m.held.clear();
+        }
         if let Some(pieces) = together {
             let h = h
                 .min(motion_bound(members, dt - t))
@@ -377,6 +382,14 @@ fn after_terms(members: &mut [Member<'_, '_>], terms: &soft_terms::Terms, at: &S
     }
     for t in &terms.terms {
         let (i, j) = (t.node_member, t.facet_member);
+        if let Some(grip) = t.grip().filter(|_| i != j) {
+            let point = members[i].body.state.positions[t.node() as usize];
+            members[i].held.push(Held {
+                other: j,
+                point,
+                grip,
+            });
+        }
         if t.pushes() {
             let m = &mut members[i];
             if i == j {
@@ -1303,6 +1316,10 @@ fn soft_contacts(members: &mut [Member<'_, '_>], at: &Substep<'_>, backward: boo
         if solve_row(members, &mut row, Some(at.restitution_threshold)) {
             let other = hit.other;
             let m = &mut members[i];
+            if let Some(grip) = row.grip().filter(|_| other != i) {
+                let point = m.body.state.positions[node as usize];
+                m.held.push(Held { other, point, grip });
+            }
             if other == i {
                 m.stats.self_contacts += 1;
             } else {

@@ -509,6 +509,8 @@ pub struct PileScene {
     pub seconds: Real,
     /// sinew's integrator (an island of deformables that may touch steps explicitly).
     pub integrator: Integrator,
+    /// sinew's `PipelineSettings::damp_held` (default true).
+    pub damp_held: bool,
 }
 
 impl Default for PileScene {
@@ -526,6 +528,7 @@ impl Default for PileScene {
             dt: 1.0 / 60.0,
             seconds: 3.0,
             integrator: Integrator::Explicit,
+            damp_held: true,
         }
     }
 }
@@ -562,6 +565,7 @@ impl PileScene {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
+        world.pipeline.settings.damp_held = self.damp_held;
         let (per_row, width) = self.layout();
         world.physics.insert(
             RigidBodyBuilder::fixed(),
@@ -732,6 +736,8 @@ pub struct TowerScene {
     pub seconds: Real,
     /// sinew's integrator.
     pub integrator: Integrator,
+    /// sinew's `PipelineSettings::damp_held` (default true).
+    pub damp_held: bool,
 }
 
 impl Default for TowerScene {
@@ -757,6 +763,7 @@ impl Default for TowerScene {
             dt: 1.0 / 60.0,
             seconds: 10.0,
             integrator: Integrator::Explicit,
+            damp_held: true,
         }
     }
 }
@@ -767,6 +774,7 @@ impl TowerScene {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
+        world.pipeline.settings.damp_held = self.damp_held;
         fall::ground(&mut world, self.friction, 0.0);
         let skin = match self.subject {
             Subject::Sinew(_) => 0.0,
