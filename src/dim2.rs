@@ -34,6 +34,12 @@ pub mod math {
         r.perp() * w
     }
 
+    /// The component of angular quantity `w` about in-plane axis `n`: none, every 2D turn is
+    /// about the normal of the plane.
+    pub fn twist_about(_w: AngVector, _n: Vector) -> Real {
+        0.0
+    }
+
     /// The unit vector along the line across unit `normal`, and zero (the line has one).
     pub fn tangents(normal: Vector) -> [Vector; 2] {
         [normal.perp(), Vector::ZERO]

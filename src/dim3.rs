@@ -35,6 +35,11 @@ pub mod math {
         w.cross(r)
     }
 
+    /// The component of angular vector `w` about unit axis `n` (its twist about it).
+    pub fn twist_about(w: AngVector, n: Vector) -> Real {
+        w.dot(n)
+    }
+
     /// Two unit vectors spanning the plane across unit `normal`.
     pub fn tangents(normal: Vector) -> [Vector; 2] {
         let (a, b) = normal.any_orthonormal_pair();

@@ -70,10 +70,9 @@ fn slide(
 }
 
 /// Launched at 0.5 and 1 m/s, the cube stops where it stops with the damping off (within 10 %),
-/// near Coulomb's `v² / (2 μ g)`: the slide is not taken for a hold. Shape matching under the
-/// implicit step once slid 0.012 m instead of 0.027 at 0.5 m/s, when the friction terms'
-/// regularised stick counted as a hold. (At 2 m/s the cube trips on the slab's facets and
-/// stops after 0.2–0.3 m of Coulomb's 0.51, with the damping on or off.)
+/// near Coulomb's `v² / (2 μ g)`: the slide is not taken for a hold (under the implicit step,
+/// whose regularised friction sticks a little while it slides, too). At 2 m/s the cube trips
+/// on the slab's facets (`docs/ARCHITECTURE.md` §6.9).
 #[test]
 fn a_cube_sliding_on_a_soft_slab_is_not_braked() {
     for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
@@ -101,8 +100,8 @@ fn a_cube_sliding_on_a_soft_slab_is_not_braked() {
 }
 
 /// Six cubes dropped on each other from 10 cm gaps at 60 Hz land, stand on their axis, create
-/// no energy and fall asleep, under both models and both integrators (the sway that kept them
-/// awake is the column's first bending mode, which the materials' damping barely reaches).
+/// no energy and fall asleep, under both models and both integrators: their sway, the
+/// column's first bending mode, which the materials' damping barely reaches, dies out.
 #[test]
 fn a_dropped_tower_of_six_stands_on_its_axis_and_sleeps() {
     for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {

@@ -129,8 +129,6 @@ pub(crate) fn normal_target(
     }
 }
 
-/// An accumulated friction impulse kept in Coulomb's disc: at most `limit` (`μ` times the
-/// accumulated normal impulse) long.
 /// How a contact between two deformables ended its solve: its push (impulse or force, never
 /// zero) along `normal`.
 #[derive(Copy, Clone, Debug)]
@@ -146,8 +144,9 @@ impl Grip {
     }
 }
 
-/// A contact of one of an island member's nodes with another member's facet, as the last
-/// substep ended it: the other member, the node's position, and the contact's grip.
+/// A contact of one of an island member's nodes with another member's facet in the last
+/// substep: the other member, the node's position when the contact was solved (before the
+/// substep moved it), and the contact's grip.
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct Held {
     pub other: usize,
@@ -155,6 +154,8 @@ pub(crate) struct Held {
     pub grip: Grip,
 }
 
+/// An accumulated friction impulse kept in Coulomb's disc: at most `limit` (`μ` times the
+/// accumulated normal impulse) long.
 pub(crate) fn coulomb(total: Vector, limit: Real) -> Vector {
     let len = total.length();
     if len > limit {

@@ -23,10 +23,10 @@
 //! a member bound to a bone is not checked (the bone does work on it).
 
 use super::super::contact::soft_terms::Memory;
-use super::super::math::{Real, Vector};
+use super::super::math::Real;
 use super::super::rapier::dynamics::RigidBodySet;
 use super::substep::{self, Member, SubstepStats};
-use super::StepContext;
+use super::{box_sides, StepContext};
 
 /// Share of the island's energy scale a step may gain: the scale is the live members' kinetic
 /// and elastic energy and each one's weight times its own extent (what a body resting on the
@@ -76,7 +76,7 @@ impl Guard {
         let smallest = members
             .iter()
             .filter(|m| m.live)
-            .map(|m| extent(&m.body.state.positions))
+            .map(|m| box_sides(&m.body.state.positions).max_element())
             .fold(Real::INFINITY, Real::min);
         let inside = substep::deepest_inside(members);
         inside > self.inside && inside > DEPTH_SHARE * smallest
@@ -116,23 +116,7 @@ fn energy(members: &[Member<'_, '_>], ctx: &StepContext<'_>) -> (Real, Real) {
         let (kinetic, elastic) = (body.kinetic_energy(), body.elastic_energy());
         let weight = body.rest.masses.iter().sum::<Real>() * g.length();
         energy += kinetic + elastic + body.gravity_energy(g);
-        scale += kinetic + elastic + weight * extent(&body.state.positions);
+        scale += kinetic + elastic + weight * box_sides(&body.state.positions).max_element();
     }
     (energy, scale)
-}
-
-/// The largest side of the box around `x` (zero when empty).
-fn extent(x: &[Vector]) -> Real {
-    let (lo, hi) = x.iter().fold(
-        (
-            Vector::splat(Real::INFINITY),
-            Vector::splat(Real::NEG_INFINITY),
-        ),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
-    if x.is_empty() {
-        0.0
-    } else {
-        (hi - lo).max_element()
-    }
 }

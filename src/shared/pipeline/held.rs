@@ -8,28 +8,28 @@
 //! viscous law cannot. So deformables that hold each other form a *composite* for this pass,
 //! and the composite's slow modes are damped as a body's own: each member's rigid motion (its
 //! best-fit translation and rotation) is pulled toward the composite's target motion by
-//! `1 − exp(−α dt)`, `α = 2ζω`, `ω = π c / L` the composite's reference frequency (`c = √(E/ρ)`
-//! the members' mass-weighted wave speed, `ζ` their damping ratio, `L` the composite's
-//! diagonal: a free bar's first axial mode). Every mode of the composite slower than `ω` is
-//! damped at least at `ζ`; the members' deformation is left to the material.
+//! `1 − exp(−α dt)`, `α = 2ζω`, `ω = π c / L` the composite's reference frequency (`ζc` the
+//! members' mass-weighted product of damping ratio and wave speed `c = √(E/ρ)`, `L` the composite's
+//! diagonal: a free bar's first axial mode). The share of a slow mode that is the members'
+//! rigid motion against each other is damped at `α / 2ω`, at least `ζ` below `ω`; the members'
+//! deformation is left to the material.
 //!
 //! - Two members *hold* each other when their contacts of the last substep press them together
 //!   over a patch (its spread across the contact at least [`PATCH_SHARE`] of the smaller
 //!   body's least extent: a face holds, an edge or a corner, about which a body tips, does not)
-//!   and they do not slide: their rigid motions slip across the patch's centre slower than the
-//!   sleep speed, or than their relative turn moves the patch's edge. Composites are the
-//!   connected sets of such pairs. (Friction's own verdict is no guide: a single pass of the
-//!   explicit step's contacts leaves the lightly pressed rows of a resting pair slipping
-//!   within each substep, and the implicit step's regularised friction sticks a little while
-//!   it slides: counted as a hold, it braked a cube sliding on a slab to half its distance.)
+//!   and they do not slide: their rigid motions slip across the patch's centre, and twist
+//!   about its normal, slower than the sleep speed or than their relative rocking moves the
+//!   patch's edge. Composites are the connected sets of such pairs. Friction's own verdict is
+//!   no guide: a single pass of the explicit step's contacts leaves the lightly pressed rows of
+//!   a resting pair slipping within each substep, and the implicit step's regularised friction
+//!   sticks a little while it slides.
 //! - A composite one of whose members rests the same way on a still, non-dynamic collider (the
-//!   ground) is *anchored*: its target is rest. (Left to settle along the ground's normal,
-//!   a shape-matched cube landing on another under the implicit step with two sweeps bounced
-//!   on it for 8 s.) Otherwise its target is its own rigid motion
+//!   ground) is *anchored*: its target is rest, so the members' settling
+//!   along the ground's normal is damped too. Otherwise its target is its own rigid motion
 //!   (the one carrying its momentum and angular momentum), so a stack thrown or falling
-//!   together keeps its flight. Pulled toward their composite's motion instead, the cubes of a
-//!   pile in a bowl were pushed into the bowl and each other, and the pile gained 0.3 % of its
-//!   energy; anchored, none.
+//!   together keeps its flight. A composite on the ground is not pulled toward its own motion:
+//!   that would push the members near the ground into it and into each other (a pile in a
+//!   bowl gains energy so).
 //!
 //! What it leaves alone: a body alone (its damping is the material's), bodies sliding on each
 //! other, touching along an edge or at a corner, or rolling on each other over a small patch,
@@ -42,6 +42,7 @@
 use super::super::material::Stiffness;
 use super::super::math::{self, AngVector, Real, Vector, DIM};
 use super::super::model::Motion;
+use super::box_sides;
 use super::substep::Member;
 
 /// The narrowest contact patch that holds two bodies (the spread of its points across the
@@ -55,22 +56,35 @@ pub(super) fn damp(members: &mut [Member<'_, '_>], dt: Real, still: Real) {
     if n < 2 || dt <= 0.0 {
         return;
     }
+    // The pairs that touched in the last substep, each once.
+    let mut pairs: Vec<(usize, usize)> = members
+        .iter()
+        .enumerate()
+        .flat_map(|(i, m)| m.held.iter().map(move |h| (i.min(h.other), i.max(h.other))))
+        .collect();
+    if pairs.is_empty() {
+        return;
+    }
+    pairs.sort_unstable();
+    pairs.dedup();
+    let touching: Vec<bool> = (0..n)
+        .map(|i| pairs.iter().any(|&(a, b)| a == i || b == i))
+        .collect();
     let fits: Vec<Option<Fit>> = members
         .iter()
-        .map(|m| if eligible(m) { Fit::of(m) } else { None })
+        .zip(&touching)
+        .map(|(m, &t)| if t && eligible(m) { Fit::of(m) } else { None })
         .collect();
     let mut parent: Vec<usize> = (0..n).collect();
     let mut any = false;
-    for a in 0..n {
-        for b in a + 1..n {
-            let (Some(fa), Some(fb)) = (&fits[a], &fits[b]) else {
-                continue;
-            };
-            if holds(members, (a, fa), (b, fb), still) {
-                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-                parent[ra.max(rb)] = ra.min(rb);
-                any = true;
-            }
+    for (a, b) in pairs {
+        let (Some(fa), Some(fb)) = (&fits[a], &fits[b]) else {
+            continue;
+        };
+        if holds(members, (a, fa), (b, fb), still) {
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            parent[ra.max(rb)] = ra.min(rb);
+            any = true;
         }
     }
     if !any {
@@ -140,14 +154,7 @@ impl Fit {
 
 /// The least side of a member's rest bounding box.
 fn least_extent(m: &Member<'_, '_>) -> Real {
-    let nodes = m.body.rest.mesh.nodes();
-    let lo = nodes
-        .iter()
-        .fold(Vector::splat(Real::INFINITY), |a, p| a.min(*p));
-    let hi = nodes
-        .iter()
-        .fold(Vector::splat(-Real::INFINITY), |a, p| a.max(*p));
-    (hi - lo).min_element()
+    box_sides(m.body.rest.mesh.nodes()).min_element()
 }
 
 /// A contact patch: its points' centre, the mean normal, and the spread of the points across
@@ -184,22 +191,27 @@ fn spread(points: &[Vector], centre: Vector, normal: Vector) -> Real {
     (mean - radius).max(0.0).sqrt()
 }
 
-/// Whether a patch (centre, normal, spread) at least `narrowest` wide does not slide: the
-/// relative rigid velocity `slip_at(centre)` across it is slower than `still` or than the
-/// relative turn `turn` moves its edge.
-fn not_sliding(
+/// Whether two sides touching over a patch (centre, normal, spread) at least `narrowest` wide
+/// do not slide: the relative velocity `velocity` of their rigid motions at the patch's centre
+/// slips across it slower than the sleep speed `still` or than their relative rocking `spin`
+/// moves the patch's edge, and their twist about the normal moves that edge slower than
+/// `still`.
+fn together(
     (centre, normal, spread): (Vector, Vector, Real),
     narrowest: Real,
-    relative: impl Fn(Vector) -> Vector,
-    turn: Real,
+    velocity: impl Fn(Vector) -> Vector,
+    spin: AngVector,
     still: Real,
 ) -> bool {
     if spread < narrowest {
         return false;
     }
-    let v = relative(centre);
+    let turn = math::ang_norm(spin);
+    let twist = math::twist_about(spin, normal);
+    let rocking = (turn * turn - twist * twist).max(0.0).sqrt();
+    let v = velocity(centre);
     let slip = (v - normal * normal.dot(v)).length();
-    slip <= (turn * spread).max(still)
+    slip <= (rocking * spread).max(still) && twist.abs() * spread <= still
 }
 
 /// Whether members `a` and `b` hold each other (module docs).
@@ -222,12 +234,17 @@ fn holds(
         return false;
     };
     let narrowest = PATCH_SHARE * least_extent(&members[a]).min(least_extent(&members[b]));
-    let turn = math::ang_norm(fb.spin - fa.spin);
-    not_sliding(patch, narrowest, |x| fb.at(x) - fa.at(x), turn, still)
+    together(
+        patch,
+        narrowest,
+        |x| fb.at(x) - fa.at(x),
+        fb.spin - fa.spin,
+        still,
+    )
 }
 
-/// Whether member `m` rests on a still, non-dynamic collider: its nodes touching such
-/// colliders span a patch and do not slide on it.
+/// Whether member `m` rests on a still, non-dynamic collider: its nodes that touched such
+/// colliders this step span a patch, and it does not slide on it.
 fn anchored(m: &Member<'_, '_>, fit: &Fit, still: Real) -> bool {
     let touch = &m.sc.touch;
     let boundary = m.body.rest.mesh.boundary_nodes();
@@ -239,7 +256,7 @@ fn anchored(m: &Member<'_, '_>, fit: &Fit, still: Real) -> bool {
     let (mut points, mut normal) = (Vec::new(), Vector::ZERO);
     for (k, contact) in touch.last_contact.iter().enumerate() {
         let Some(contact) = contact else { continue };
-        if touch.touched_nodes[k] && resting_on(contact.collider) {
+        if resting_on(contact.collider) {
             points.push(m.body.state.positions[boundary[k] as usize]);
             normal += contact.normal;
         }
@@ -248,8 +265,7 @@ fn anchored(m: &Member<'_, '_>, fit: &Fit, still: Real) -> bool {
         return false;
     };
     let narrowest = PATCH_SHARE * least_extent(m);
-    let turn = math::ang_norm(fit.spin);
-    not_sliding(patch, narrowest, |x| fit.at(x), turn, still)
+    together(patch, narrowest, |x| fit.at(x), fit.spin, still)
 }
 
 /// Pulls the rigid motion of each member of `composite` toward the composite's target.
@@ -275,13 +291,7 @@ fn damp_composite(
                 .as_ref()
                 .is_some_and(|f| anchored(&members[i], f, still));
     }
-    let lo = x
-        .iter()
-        .fold(Vector::splat(Real::INFINITY), |a, p| a.min(*p));
-    let hi = x
-        .iter()
-        .fold(Vector::splat(-Real::INFINITY), |a, p| a.max(*p));
-    let length = (hi - lo).length();
+    let length = box_sides(&x).length();
     if !(mass > 0.0 && length > 0.0) {
         return;
     }
