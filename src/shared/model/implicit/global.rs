@@ -183,6 +183,20 @@ impl Sparse {
         &self.parts[..self.len]
     }
 
+    /// Multiplies every entry by `scale`.
+    fn scale(&mut self, scale: f64) {
+        for (_, r) in &mut self.parts[..self.len] {
+            r.iter_mut().for_each(|a| *a *= scale);
+        }
+    }
+
+    /// Adds `scale · other`.
+    fn add_scaled(&mut self, other: &Sparse, scale: f64) {
+        for &(cluster, row) in other.parts() {
+            self.add(cluster, row, scale);
+        }
+    }
+
     fn add(&mut self, cluster: usize, row: [f64; COARSE], scale: f64) {
         debug_assert!(self.len < TERM_CLUSTERS || self.parts().iter().any(|p| p.0 == cluster));
         if let Some((_, r)) = self.parts[..self.len]
@@ -205,6 +219,9 @@ struct Coarse {
     clusters: usize,
     matrix: Vec<f64>,
     factor: Option<Vec<f64>>,
+    /// Per row of the matrix, its first non-zero column: the factor's rows start there too
+    /// (a clustered body couples only neighbouring clusters, so most of each row is zero).
+    first: Vec<usize>,
 }
 
 impl Coarse {
@@ -266,6 +283,7 @@ impl Coarse {
             clusters,
             matrix: vec![0.0; size * size],
             factor: None,
+            first: Vec::new(),
         }
     }
 
@@ -289,6 +307,56 @@ impl Coarse {
         }
     }
 
+    /// Adds `Pᵢᵀ B Pⱼ` for free nodes `i`, `j`: with `Pᵢ = [I, I ⊗ oᵢᵀ]` (a translation, then
+    /// the linear map's rows), its blocks are `B`, `B ⊗ oⱼᵀ`, `B ⊗ oᵢ` and `B ⊗ oᵢ oⱼᵀ`.
+    fn add_block(&mut self, (i, j): (usize, usize), b: Matrix) {
+        let size = self.size();
+        let (oi, oj) = (self.offset[i], self.offset[j]);
+        let (row0, col0) = (self.cluster[i] * COARSE, self.cluster[j] * COARSE);
+        let m = &mut self.matrix;
+        for r in 0..DIM {
+            for s in 0..DIM {
+                let brs = b.col(s)[r] as f64;
+                if brs == 0.0 {
+                    continue;
+                }
+                m[(row0 + r) * size + col0 + s] += brs;
+                for c in 0..DIM {
+                    let (ic, jc) = (oi[c] as f64, oj[c] as f64);
+                    m[(row0 + r) * size + col0 + DIM + s * DIM + c] += brs * jc;
+                    m[(row0 + DIM + r * DIM + c) * size + col0 + s] += brs * ic;
+                    let row = (row0 + DIM + r * DIM + c) * size + col0 + DIM + s * DIM;
+                    for d in 0..DIM {
+                        m[row + d] += brs * ic * oj[d] as f64;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Adds `(Pᵢ − Pⱼ)ᵀ B (Pᵢ − Pⱼ)` for two free nodes of `cluster`, `δ = oᵢ − oⱼ`: the
+    /// translations cancel, leaving `B ⊗ δ δᵀ` on the linear map.
+    fn add_linear(&mut self, cluster: usize, delta: Vector, b: Matrix) {
+        let size = self.size();
+        let base = cluster * COARSE + DIM;
+        let m = &mut self.matrix;
+        for r in 0..DIM {
+            for s in 0..DIM {
+                let brs = b.col(s)[r] as f64;
+                if brs == 0.0 {
+                    continue;
+                }
+                for c in 0..DIM {
+                    let row = (base + r * DIM + c) * size + base + s * DIM;
+                    let bc = brs * delta[c] as f64;
+                    for d in 0..DIM {
+                        m[row + d] += bc * delta[d] as f64;
+                    }
+                }
+            }
+        }
+    }
+
     /// `Pᵀ g` of node `i` (nothing for a held node).
     fn row(&self, i: usize, g: Vector, free: &[bool], scale: Real, into: &mut Sparse) {
         if free[i] {
@@ -297,6 +365,8 @@ impl Coarse {
     }
 
     /// Factors the matrix (Cholesky, with a small ridge for unknowns no free node moves).
+    /// Each row's entries before its first non-zero stay zero in the factor, so the sums skip
+    /// them: the same factor, at the cost of the matrix's envelope rather than its size cubed.
     fn factor(&mut self) {
         let size = self.size();
         let mut a = self.matrix.clone();
@@ -304,23 +374,32 @@ impl Coarse {
         for i in 0..size {
             a[i * size + i] += ridge.max(1e-300);
         }
+        self.first = (0..size)
+            .map(|i| (0..i).find(|&k| a[i * size + k] != 0.0).unwrap_or(i))
+            .collect();
+        let first = &self.first;
         for j in 0..size {
-            let mut d = a[j * size + j];
-            for k in 0..j {
-                d -= a[j * size + k] * a[j * size + k];
+            let row_j = j * size;
+            let mut d = a[row_j + j];
+            for k in first[j]..j {
+                d -= a[row_j + k] * a[row_j + k];
             }
             if d.is_nan() || d <= 0.0 {
                 self.factor = None;
                 return;
             }
             let d = d.sqrt();
-            a[j * size + j] = d;
+            a[row_j + j] = d;
             for i in j + 1..size {
-                let mut s = a[i * size + j];
-                for k in 0..j {
-                    s -= a[i * size + k] * a[j * size + k];
+                if first[i] > j {
+                    continue;
                 }
-                a[i * size + j] = s / d;
+                let row_i = i * size;
+                let mut s = a[row_i + j];
+                for k in first[i].max(first[j])..j {
+                    s -= a[row_i + k] * a[row_j + k];
+                }
+                a[row_i + j] = s / d;
             }
         }
         self.factor = Some(a);
@@ -342,9 +421,10 @@ impl Coarse {
                 }
             }
         }
+        let first = &self.first;
         for i in 0..size {
             let mut s = b[i];
-            for k in 0..i {
+            for k in first[i]..i {
                 s -= l[i * size + k] * b[k];
             }
             b[i] = s / l[i * size + i];
@@ -352,7 +432,9 @@ impl Coarse {
         for i in (0..size).rev() {
             let mut s = b[i];
             for k in i + 1..size {
-                s -= l[k * size + i] * b[k];
+                if first[k] <= i {
+                    s -= l[k * size + i] * b[k];
+                }
             }
             b[i] = s / l[i * size + i];
         }
@@ -379,27 +461,25 @@ impl Terms<'_> {
     fn coarse(&self, coarse: &mut Coarse, free: &[bool]) {
         let mut u = Sparse::new();
         for (i, m) in self.inertia.iter().enumerate() {
-            for d in 0..DIM {
-                u.clear();
-                coarse.row(i, unit(d), free, 1.0, &mut u);
-                coarse.add_outer(&u, *m as f64);
+            if free[i] {
+                coarse.add_block((i, i), Matrix::IDENTITY * *m);
             }
         }
-        let mut q = [Sparse::new(), Sparse::new(), Sparse::new()];
         for &(i, j, b) in &self.springs {
-            // `Σ_rs B_rs q_r q_sᵀ`, `q_r = (Pᵢ − Pⱼ)ᵀ e_r`.
-            for (r, q) in q.iter_mut().enumerate().take(DIM) {
-                q.clear();
-                coarse.row(i, unit(r), free, 1.0, q);
-                coarse.row(j, unit(r), free, -1.0, q);
-            }
-            for r in 0..DIM {
-                for s in 0..DIM {
-                    let brs = b.col(s)[r];
-                    if brs != 0.0 {
-                        add_cross(coarse, &q[r], &q[s], brs as f64);
-                    }
+            // `(Pᵢ − Pⱼ)ᵀ B (Pᵢ − Pⱼ)`, a held node's `P` zero.
+            match (free[i], free[j]) {
+                (true, true) if coarse.cluster[i] == coarse.cluster[j] => {
+                    coarse.add_linear(coarse.cluster[i], coarse.offset[i] - coarse.offset[j], b);
                 }
+                (true, true) => {
+                    coarse.add_block((i, i), b);
+                    coarse.add_block((j, j), b);
+                    coarse.add_block((i, j), -b);
+                    coarse.add_block((j, i), -b);
+                }
+                (true, false) => coarse.add_block((i, i), b),
+                (false, true) => coarse.add_block((j, j), b),
+                (false, false) => {}
             }
         }
         let a = SIMPLEX_ARITY;
@@ -427,12 +507,14 @@ impl Terms<'_> {
                 let k = shape.k[c] as f64;
                 let r = &shape.offsets[c * n..(c + 1) * n];
                 // The centring `Σ_a P_aᵀ P_a − (Σ_a P_a)ᵀ (Σ_a P_a) / n`, axis by axis.
+                for &i in ids {
+                    if free[i as usize] {
+                        coarse.add_block((i as usize, i as usize), Matrix::IDENTITY * k as Real);
+                    }
+                }
                 for d in 0..DIM {
                     let mut sum = Sparse::new();
                     for &i in ids {
-                        u.clear();
-                        coarse.row(i as usize, unit(d), free, 1.0, &mut u);
-                        coarse.add_outer(&u, k);
                         coarse.row(i as usize, unit(d), free, 1.0, &mut sum);
                     }
                     coarse.add_outer(&sum, -k / n as f64);
@@ -443,14 +525,18 @@ impl Terms<'_> {
                         coarse.row(i as usize, math::ang_cross(*axis, *r), free, 1.0, mode);
                     }
                 }
+                // `−k Σ_de M_de mode_d mode_eᵀ` as `−k Σ_d mode_d (Σ_e M_de mode_e)ᵀ`.
                 for d in 0..ANG_DIM {
                     let inverse = shape.turns[c * ANG_DIM + d];
+                    let mut mixed = modes[d].clone();
+                    mixed.scale(0.0);
                     for (e, mode) in modes.iter().enumerate() {
                         let m = ang_component(inverse, e) as f64;
                         if m != 0.0 && m.is_finite() {
-                            add_cross(coarse, &modes[d], mode, -k * m);
+                            mixed.add_scaled(mode, -k * m);
                         }
                     }
+                    add_cross(coarse, &modes[d], &mixed, 1.0);
                 }
             }
         }
