@@ -180,7 +180,7 @@ pub enum Integrator {
     /// (E = 10⁸ Pa, 1000 kg/m³, 5 nodes across) hangs straight at 60 Hz even with 50 sweeps.
     /// [`PipelineSettings::global_iterations`](super::PipelineSettings::global_iterations)
     /// adds a Newton step over the whole body before the sweeps: with 10 it rings at 4.8 Hz
-    /// (Euler–Bernoulli: 5.1; shape matching 4.9) about 13.0–13.6 mm of sag (14.9), 50–60×
+    /// (Euler–Bernoulli: 5.1; shape matching 4.9) about 13.0–13.6 mm of sag (14.9), about 30×
     /// cheaper than the explicit step.
     Implicit {
         /// Sweeps per step.

@@ -120,8 +120,8 @@ pub struct PipelineSettings {
     /// (it hangs straight under the sweeps alone). 0, the default: the sweeps alone. Each
     /// step assembles and factors a coarse system of at most 384 unknowns (32 clusters of
     /// nodes, each moving affinely) and each iteration costs about a sweep: with 10, the
-    /// 1 075-node beam of `scenes bending --res 5` costs about 4× what its 2 sweeps cost
-    /// alone; 5–10 iterations converge the beam.
+    /// 1 075-node beam of `scenes bending --res 5` costs 4–7× what its 2 sweeps cost alone;
+    /// 5–10 iterations converge the beam.
     /// Every model with an implicit step. A body bound to bones takes the midpoint step only
     /// with it ([`Integrator::Midpoint`]). Not yet for bodies under heavy contact loads: with
     /// it, `scenes advise --trial crush` (1000 kg on a soft cube) inverts edge-repulsion cells
