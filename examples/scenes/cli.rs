@@ -146,7 +146,7 @@ pub struct Args {
     #[arg(long)]
     pub sweeps: Option<usize>,
     /// Conjugate-gradient iterations of the implicit steps' Newton step over each whole body,
-    /// before the sweeps (`PipelineSettings::global_iterations`; cantilever, bending and roll;
+    /// before the sweeps (`PipelineSettings::global_iterations`; fall, cantilever, bending and roll;
     /// default 0: none).
     #[arg(long)]
     pub global: Option<usize>,
@@ -654,6 +654,7 @@ macro_rules! dimension_runner {
                         },
                         _ => Integrator::Explicit,
                     },
+                    global_iterations: args.global.unwrap_or(0),
                     ..d
                 }
             }

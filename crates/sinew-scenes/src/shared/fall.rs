@@ -51,6 +51,9 @@ pub struct FallScene {
     pub fixed_substeps: Option<usize>,
     /// sinew's integrator.
     pub integrator: Integrator,
+    /// [`PipelineSettings::global_iterations`](sinew::dim3::PipelineSettings::global_iterations)
+    /// under the implicit steps (0: the sweeps alone).
+    pub global_iterations: usize,
 }
 
 impl Default for FallScene {
@@ -74,6 +77,7 @@ impl Default for FallScene {
             seconds: 3.0,
             fixed_substeps: None,
             integrator: Integrator::Explicit,
+            global_iterations: 0,
         }
     }
 }
@@ -110,6 +114,7 @@ impl FallScene {
         let mut world = DeformableWorld::new();
         world.set_dt(self.dt);
         world.pipeline.settings.integrator = self.integrator;
+        world.pipeline.settings.global_iterations = self.global_iterations;
         ground(&mut world, self.friction, self.restitution);
         world
     }
