@@ -210,6 +210,8 @@ struct Coarse {
     cluster: Vec<usize>,
     offset: Vec<Vector>,
     clusters: usize,
+    /// The coarse operator, row-major; symmetric, so only its lower triangle (column ≤ row)
+    /// is assembled: the factor reads no other entry, and every `add_*` skips the rest.
     matrix: Vec<f64>,
     factor: Option<Vec<f64>>,
     /// Per row of the matrix, its first non-zero column: the factor's rows start there too
@@ -285,15 +287,19 @@ impl Coarse {
         self.clusters * COARSE
     }
 
-    /// Adds `scale · u uᵀ`.
+    /// Adds `scale · u uᵀ` (its lower triangle, as every `add_*`).
     fn add_outer(&mut self, u: &Sparse, scale: f64) {
         let size = self.size();
         for (ca, ra) in u.parts() {
             for (cb, rb) in u.parts() {
+                if ca < cb {
+                    continue;
+                }
                 for (a, va) in ra.iter().enumerate() {
                     let row = (ca * COARSE + a) * size + cb * COARSE;
                     let s = va * scale;
-                    for (b, vb) in rb.iter().enumerate() {
+                    let columns = if ca == cb { a + 1 } else { COARSE };
+                    for (b, vb) in rb[..columns].iter().enumerate() {
                         self.matrix[row + b] += s * vb;
                     }
                 }
@@ -304,24 +310,37 @@ impl Coarse {
     /// Adds `Pᵢᵀ B Pⱼ` for free nodes `i`, `j`: with `Pᵢ = [I, I ⊗ oᵢᵀ]` (a translation, then
     /// the linear map's rows), its blocks are `B`, `B ⊗ oⱼᵀ`, `B ⊗ oᵢ` and `B ⊗ oᵢ oⱼᵀ`.
     fn add_block(&mut self, (i, j): (usize, usize), b: Matrix) {
+        let (ci, cj) = (self.cluster[i], self.cluster[j]);
+        if ci < cj {
+            return;
+        }
         let size = self.size();
         let (oi, oj) = (self.offset[i], self.offset[j]);
-        let (row0, col0) = (self.cluster[i] * COARSE, self.cluster[j] * COARSE);
+        let (row0, col0) = (ci * COARSE, cj * COARSE);
         let m = &mut self.matrix;
+        // Within one cluster's diagonal block, its lower triangle only.
+        let mut put = |row: usize, col: usize, v: f64| {
+            if ci != cj || col <= row {
+                m[(row0 + row) * size + col0 + col] += v;
+            }
+        };
         for r in 0..DIM {
             for s in 0..DIM {
                 let brs = b.col(s)[r] as f64;
                 if brs == 0.0 {
                     continue;
                 }
-                m[(row0 + r) * size + col0 + s] += brs;
+                put(r, s, brs);
                 for c in 0..DIM {
                     let (ic, jc) = (oi[c] as f64, oj[c] as f64);
-                    m[(row0 + r) * size + col0 + DIM + s * DIM + c] += brs * jc;
-                    m[(row0 + DIM + r * DIM + c) * size + col0 + s] += brs * ic;
-                    let row = (row0 + DIM + r * DIM + c) * size + col0 + DIM + s * DIM;
+                    put(r, DIM + s * DIM + c, brs * jc);
+                    put(DIM + r * DIM + c, s, brs * ic);
                     for d in 0..DIM {
-                        m[row + d] += brs * ic * oj[d] as f64;
+                        put(
+                            DIM + r * DIM + c,
+                            DIM + s * DIM + d,
+                            brs * ic * oj[d] as f64,
+                        );
                     }
                 }
             }
@@ -346,7 +365,9 @@ impl Coarse {
                     let row = (base + r * DIM + c) * size + base + s * DIM;
                     let bc = brs * delta[c];
                     for d in 0..DIM {
-                        m[row + d] += bc * delta[d];
+                        if s * DIM + d <= r * DIM + c {
+                            m[row + d] += bc * delta[d];
+                        }
                     }
                 }
             }
@@ -548,9 +569,13 @@ fn add_cross(coarse: &mut Coarse, u: &Sparse, w: &Sparse, scale: f64) {
     let size = coarse.size();
     for (ca, ra) in u.parts() {
         for (cb, rb) in w.parts() {
+            if ca < cb {
+                continue;
+            }
             for (a, va) in ra.iter().enumerate() {
                 let row = (ca * COARSE + a) * size + cb * COARSE;
-                for (b, vb) in rb.iter().enumerate() {
+                let columns = if ca == cb { a + 1 } else { COARSE };
+                for (b, vb) in rb[..columns].iter().enumerate() {
                     coarse.matrix[row + b] += scale * va * vb;
                 }
             }
@@ -892,7 +917,8 @@ mod tests {
                         column[coarse.cluster[i] * COARSE + m] += value;
                     }
                 }
-                for (row, expected) in column.iter().enumerate() {
+                // The lower triangle, which is all the assembly keeps.
+                for (row, expected) in column.iter().enumerate().skip(k) {
                     let got = coarse.matrix[row * size + k];
                     assert!(
                         (got - expected).abs() <= 1e-4 * scale,
