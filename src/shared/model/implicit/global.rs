@@ -397,10 +397,8 @@ impl Coarse {
         let first = &self.first;
         for j in 0..size {
             let row_j = j * size;
-            let mut d = a[row_j + j];
-            for k in first[j]..j {
-                d -= a[row_j + k] * a[row_j + k];
-            }
+            let lj = &a[row_j + first[j]..row_j + j];
+            let d = a[row_j + j] - dot64(lj, lj);
             if d.is_nan() || d <= 0.0 {
                 self.factor = None;
                 return;
@@ -412,10 +410,9 @@ impl Coarse {
                     continue;
                 }
                 let row_i = i * size;
-                let mut s = a[row_i + j];
-                for k in first[i].max(first[j])..j {
-                    s -= a[row_i + k] * a[row_j + k];
-                }
+                let from = first[i].max(first[j]);
+                let s =
+                    a[row_i + j] - dot64(&a[row_i + from..row_i + j], &a[row_j + from..row_j + j]);
                 a[row_i + j] = s / d;
             }
         }
@@ -427,10 +424,7 @@ impl Coarse {
         let size = self.size();
         let first = &self.first;
         for i in 0..size {
-            let mut s = b[i];
-            for k in first[i]..i {
-                s -= l[i * size + k] * b[k];
-            }
+            let s = b[i] - dot64(&l[i * size + first[i]..i * size + i], &b[first[i]..i]);
             b[i] = s / l[i * size + i];
         }
         // `Lᵀ`, by columns of `L`'s rows: once `b[i]` is known, it leaves the rows above.
@@ -562,6 +556,24 @@ impl Terms<'_> {
             }
         }
     }
+}
+
+/// `Σ a_k b_k` in four running sums (so that it vectorises).
+fn dot64(a: &[f64], b: &[f64]) -> f64 {
+    let mut sums = [0.0f64; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = a4
+        .remainder()
+        .iter()
+        .zip(b4.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in a4.zip(b4) {
+        for k in 0..4 {
+            sums[k] += x[k] * y[k];
+        }
+    }
+    (sums[0] + sums[1]) + (sums[2] + sums[3]) + tail
 }
 
 /// Adds `scale · u wᵀ`.
