@@ -576,7 +576,7 @@ fn dot64(a: &[f64], b: &[f64]) -> f64 {
     (sums[0] + sums[1]) + (sums[2] + sums[3]) + tail
 }
 
-/// Adds `scale · u wᵀ`.
+/// Adds `scale · u wᵀ` (its lower triangle, as every `add_*`).
 fn add_cross(coarse: &mut Coarse, u: &Sparse, w: &Sparse, scale: f64) {
     let size = coarse.size();
     for (ca, ra) in u.parts() {
