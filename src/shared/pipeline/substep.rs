@@ -229,6 +229,10 @@ fn move_positions(
     }
 }
 
+/// Share of the sleep speed below which an island's solve counts as settled
+/// ([`Integrate::solve_together`]): a sweep that moves no node faster ends the sweeps.
+const SETTLED_SHARE: Real = 1.0 / 16.0;
+
 /// The step of an island the integrator solves with its contacts between deformables
 /// ([`Integrate::solve_together`]): each live member's velocities and collider contacts, the
 /// contacts between the members found on those velocities ([`soft_terms`]), the island's
@@ -297,7 +301,8 @@ fn step_together(
             reactions: Vec::new(),
         })
         .collect();
-    let solved = integrator.solve_together(&mut together, &mut terms, at.h);
+    let settled = SETTLED_SHARE * ctx.settings.sleep_speed;
+    let solved = integrator.solve_together(&mut together, &mut terms, (at.h, settled));
     let reactions: Vec<(Vec<Vector>, Vec<Vector>)> = together
         .into_iter()
         .map(|t| (t.before, t.reactions))
