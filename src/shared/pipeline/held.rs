@@ -1,5 +1,5 @@
 //! Deformables held against each other by their contacts damp their motion against each
-//! other (run after each substep, on that substep's contacts).
+//! other (run after the substeps, before the sleep test).
 //!
 //! A material's damping acts on each term's stretching rate, so a slow mode of bodies resting
 //! on each other, such as a tower of cubes swaying in its first bending mode (each cube
@@ -49,9 +49,8 @@ use super::substep::Member;
 /// contact, a standard deviation), as a share of the smaller body's least rest extent.
 const PATCH_SHARE: Real = 0.15;
 
-/// Damps the rigid motion of each composite's members toward its target over `dt`, a substep
-/// (module docs); `still`: the speed under which bodies count as not slipping (the sleep
-/// speed).
+/// Damps the rigid motion of each composite's members toward its target over `dt` (module
+/// docs); `still`: the speed under which bodies count as not slipping (the sleep speed).
 pub(super) fn damp(members: &mut [Member<'_, '_>], dt: Real, still: Real) {
     let n = members.len();
     if n < 2 || dt <= 0.0 {

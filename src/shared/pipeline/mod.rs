@@ -618,6 +618,13 @@ fn step_group<'a>(
             substep::run(&integrator, members, (soft, together), ctx, bodies);
         }
     }
+    // Not under the midpoint setting: damped so, the 3D pile of ten shape-matched cubes
+    // (`scenes pile`, 60 Hz) does not settle in 3 s (1.4 mm inside each other, 3.5 cm/s),
+    // where undamped it sleeps 0.4 mm inside; why is not known yet.
+    let midpoint = matches!(ctx.settings.integrator, Integrator::Midpoint { .. });
+    if ctx.settings.damp_held && !midpoint {
+        held::damp(members, ctx.dt, ctx.settings.sleep_speed);
+    }
     record_touching(members);
     let mut ready = Vec::with_capacity(members.len());
     for m in members.iter_mut() {

@@ -7,7 +7,7 @@ use super::super::contact::soft::{self, NearFacets};
 use super::super::contact::soft_terms;
 use super::super::contact::{self, Contact, FacetMotion, FacetSlack, FreeNode, Held};
 use super::super::coupling::{self, BodyMotion, Substep};
-use super::super::integrator::{AfterContacts, Bound, Integrate, Integrator, Together};
+use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
 use super::super::math::{self, AngVector, Real, Vector, FACET_ARITY};
 use super::super::mesh::Mesh;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
@@ -129,7 +129,6 @@ pub(super) fn run(
             step_together(integrator, members, (&live, &motions), ctx, &at, bodies);
             rigid_passes(members, &live, ctx, (h, t), &motions, false, bodies);
             move_positions(integrator, members, &live, h);
-            damp_held(members, ctx, h);
             t += h;
             substeps += 1;
             continue;
@@ -155,25 +154,11 @@ pub(super) fn run(
         }
 
         move_positions(integrator, members, &live, h);
-        damp_held(members, ctx, h);
         t += h;
         substeps += 1;
     }
     for (m, motions) in members.iter_mut().zip(motions) {
         m.sc.broad.motions = motions;
-    }
-}
-
-/// The damping of deformables held against each other ([`held`](super::held)) over a substep
-/// of `h`, on that substep's contacts (why each substep: `docs/ARCHITECTURE.md` §6.10).
-///
-/// Not under the midpoint setting: damped so, the 3D pile of ten shape-matched cubes
-/// (`scenes pile`, 60 Hz) does not settle in 3 s (1.4 mm inside each other, 3.5 cm/s), where
-/// undamped it sleeps 0.4 mm inside; why is not known yet.
-fn damp_held(members: &mut [Member<'_, '_>], ctx: &StepContext<'_>, h: Real) {
-    let midpoint = matches!(ctx.settings.integrator, Integrator::Midpoint { .. });
-    if ctx.settings.damp_held && !midpoint {
-        super::held::damp(members, h, ctx.settings.sleep_speed);
     }
 }
 
