@@ -107,7 +107,8 @@ pub(crate) trait Integrate {
     /// solved once); returns whether it did. Explicit integrators leave such contacts to the
     /// velocities after their step.
     ///
-    /// `settled`: a solve may stop once a pass moves no node faster than that (m/s).
+    /// `step`: the substep `h` and the speed (m/s) below which the solve counts as settled: it
+    /// may stop once a pass moves no node faster.
     fn solve_together(
         &self,
         _members: &mut [Together<'_>],
