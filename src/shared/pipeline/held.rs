@@ -1,5 +1,5 @@
 //! Deformables held against each other by their contacts damp their motion against each
-//! other (run after the substeps, before the sleep test).
+//! other (run every `HELD_PERIOD` of a step and at its end, before the sleep test).
 //!
 //! A material's damping acts on each term's stretching rate, so a slow mode of bodies resting
 //! on each other, such as a tower of cubes swaying in its first bending mode (each cube

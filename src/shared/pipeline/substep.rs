@@ -100,14 +100,17 @@ pub(super) struct Member<'m, 'a> {
 /// Runs the substeps of a group's step, the velocities advanced by `integrator`; with `soft`,
 /// the members meet each other's surfaces (and their own, with self contact) every substep,
 /// inside the integrator's solve with `together` ([`step_together`], in at least that many
-/// substeps), else on the velocities after it ([`soft_contacts`]).
+/// substeps), else on the velocities after it ([`soft_contacts`]). Deformables held against
+/// each other are damped ([`held`](super::held)) on a substep's contacts each
+/// [`HELD_PERIOD`] of the step; returns the time since the last such pass, for the pass at
+/// the step's end.
 pub(super) fn run(
     integrator: &impl Integrate,
     members: &mut [Member<'_, '_>],
     (soft, together): (bool, Option<usize>),
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
-) {
+) -> Real {
     let dt = ctx.dt;
     let live: Vec<usize> = (0..members.len()).filter(|&i| members[i].live).collect();
     // The motions are read all through the loop while the other buffers change.
@@ -117,7 +120,13 @@ pub(super) fn run(
         .collect();
     let mut t = 0.0;
     let mut substeps = 0;
+    let passes = (dt / HELD_PERIOD).ceil().max(1.0);
+    let mut damped = 0.0;
     while let Some(h) = next_substep(integrator, members, &live, ctx, dt - t, substeps) {
+        if t > damped && (t * passes / dt).floor() > (damped * passes / dt).floor() {
+            super::damp_held(members, ctx, t - damped);
+            damped = t;
+        }
         for m in members.iter_mut() {
             m.held.clear();
         }
@@ -160,7 +169,13 @@ pub(super) fn run(
     for (m, motions) in members.iter_mut().zip(motions) {
         m.sc.broad.motions = motions;
     }
+    t - damped
 }
+
+/// The longest stretch of a step between two passes of the damping of held deformables. A pass
+/// sees the contacts of one substep only, so once a long step it misses bodies that bounce
+/// apart and press together again within the step (`docs/ARCHITECTURE.md` §6.10).
+pub(super) const HELD_PERIOD: Real = 2e-3;
 
 /// Most substeps an island solved together takes in a step.
 const MAX_TOGETHER_SUBSTEPS: usize = 16;
