@@ -9,8 +9,10 @@ use super::super::mesh::Mesh;
 use super::super::rapier::geometry::Aabb;
 use super::super::rapier::parry::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 
-/// One leaf per boundary facet (leaf index = the facet's index in
-/// [`Mesh::boundary_facets`]), each the facet's box.
+/// A hierarchy of boxes refitted while their count stays. A body's surface: one leaf per
+/// boundary facet (leaf index = the facet's index in [`Mesh::boundary_facets`]), each the
+/// facet's box; also the facets' swept boxes of soft contact and the bodies' boxes the islands
+/// are found from ([`SurfaceTree::set`]).
 #[derive(Clone, Default)]
 pub(crate) struct SurfaceTree {
     bvh: Bvh,
@@ -47,6 +49,19 @@ impl SurfaceTree {
     }
 
     /// Brings every leaf to its facet's current box.
+    /// Sets the leaves' boxes to `boxes` (one per leaf, in order): refitted while the count
+    /// stays, built afresh when it changes.
+    pub fn set(&mut self, boxes: &[Aabb]) {
+        if self.bvh.leaf_count() as usize != boxes.len() || boxes.is_empty() {
+            self.bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, boxes);
+            return;
+        }
+        for (k, b) in boxes.iter().enumerate() {
+            self.bvh.insert_or_update_partially(*b, k as u32, 0.0);
+        }
+        self.bvh.refit(&mut self.workspace);
+    }
+
     pub fn refit(&mut self, mesh: &Mesh, positions: &[Vector]) {
         for (k, f) in mesh.boundary_facets().iter().enumerate() {
             self.bvh

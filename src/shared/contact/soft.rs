@@ -50,19 +50,19 @@
 //! which leaves a cell's rigid motion alone, take nothing from the upper body rocking as a
 //! whole, so the pair does not fall asleep.
 
-use super::super::body::Deformable;
+use super::super::body::{Deformable, SurfaceTree};
 use super::super::coupling::Substep;
 use super::super::math::{self, Real, Vector, FACET_ARITY, SIMPLEX_ARITY};
 use super::super::mesh::{CellKind, Mesh};
 use super::super::rapier::dynamics::CoefficientCombineRule;
 use super::super::rapier::geometry::{Aabb, BoundingVolume};
-use super::super::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
 
 /// A body's surface as the other members of its group meet it during a step.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct SoftSurface {
-    /// The facets' boxes swept over the step (leaf = boundary facet index).
-    tree: Bvh,
+    /// The facets' boxes swept over the step (leaf = boundary facet index), refitted step
+    /// after step.
+    tree: SurfaceTree,
     /// Deeper than this behind a facet, a node is not pushed out through it: half the body's
     /// shortest surface edge at rest.
     depth_limit: Real,
@@ -110,7 +110,7 @@ impl SoftSurface {
                 b
             })
             .collect();
-        self.tree = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+        self.tree.set(&boxes);
         self.normals.clear();
         self.normals.resize(x.len(), Vector::ZERO);
         for f in body.rest.mesh.boundary_facets() {
@@ -245,7 +245,7 @@ pub(crate) fn node_tables<'s>(
     }
     let near_others: Vec<(usize, &SoftSurface)> = others
         .filter(|(_, surface)| {
-            !surface.tree.is_empty() && surface.tree.root_aabb().intersects(&region)
+            !surface.tree.bvh().is_empty() && surface.tree.bvh().root_aabb().intersects(&region)
         })
         .collect();
     for (k, &i) in body.rest.mesh.boundary_nodes().iter().enumerate() {
@@ -253,8 +253,8 @@ pub(crate) fn node_tables<'s>(
             let b = node_box(i);
             let begin = cands.len();
             for &(m, surface) in &near_others {
-                if surface.tree.root_aabb().intersects(&b) {
-                    cands.extend(surface.tree.intersect_aabb(&b).map(|f| (m as u32, f)));
+                if surface.tree.bvh().root_aabb().intersects(&b) {
+                    cands.extend(surface.tree.bvh().intersect_aabb(&b).map(|f| (m as u32, f)));
                 }
             }
             if let (Some((m, surface)), Some(near)) = (own, near) {
@@ -262,6 +262,7 @@ pub(crate) fn node_tables<'s>(
                 cands.extend(
                     surface
                         .tree
+                        .bvh()
                         .intersect_aabb(&b)
                         .filter(|f| skip.binary_search(f).is_err())
                         .map(|f| (m as u32, f)),

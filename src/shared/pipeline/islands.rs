@@ -7,22 +7,22 @@
 //! pad's whole step shoves the box away before the second pad has pushed back (a 1 kg box
 //! pinched at 60 Hz left at 1 m/s sideways). In one island their substeps interleave.
 
-use super::super::body::Deformable;
+use super::super::body::{Deformable, SurfaceTree};
 use super::super::contact;
 use super::super::math::Real;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::rapier::geometry::{Aabb, BoundingVolume, ColliderHandle};
-use super::super::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
 use super::super::set::{DeformableHandle, DeformableSet};
 use super::StepContext;
 
 /// The pairs of deformables that may touch this step, from their boxes swept over the step (a
-/// BVH over the bodies' boxes, one query each), by their collision groups; both asleep, or
-/// either frozen, a pair is left out. Also wakes a sleeping body that a moving one comes near.
+/// BVH over the bodies' boxes in `tree`, refitted from step to step, one query each), by their
+/// collision groups; both asleep, or either frozen, a pair is left out. Also wakes a sleeping
+/// body that a moving one comes near.
 pub(super) fn pairs(
     set: &mut DeformableSet,
-    dt: Real,
-    sleep_speed: Real,
+    (dt, sleep_speed): (Real, Real),
+    tree: &mut SurfaceTree,
     out: &mut Vec<(DeformableHandle, DeformableHandle)>,
 ) {
     out.clear();
@@ -44,10 +44,10 @@ pub(super) fn pairs(
         return;
     }
     let boxes: Vec<Aabb> = bodies.iter().map(|b| b.1).collect();
-    let tree = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+    tree.set(&boxes);
     let mut wake = Vec::new();
     for (a, (ha, box_a, moving_a)) in bodies.iter().enumerate() {
-        for b in tree.intersect_aabb(box_a) {
+        for b in tree.bvh().intersect_aabb(box_a) {
             let b = b as usize;
             if b <= a {
                 continue;
@@ -89,7 +89,7 @@ pub(super) fn pairs(
         }
     }
     if woke_more {
-        pairs(set, dt, sleep_speed, out);
+        pairs(set, (dt, sleep_speed), tree, out);
     }
 }
 

@@ -61,7 +61,7 @@ use substep::{Member, SubstepStats};
 
 use std::time::Instant;
 
-use super::body::Deformable;
+use super::body::{Deformable, SurfaceTree};
 use super::contact::soft::{self, SoftSurface};
 use super::contact::{Candidate, ContactMaterial, ContactPoint, Scan};
 use super::coupling::{self, BodyMotion, RigidBackup};
@@ -198,6 +198,8 @@ struct Work {
     pushed: Vec<RigidBodyHandle>,
     /// Pairs of deformables that may touch this step.
     pairs: Vec<(DeformableHandle, DeformableHandle)>,
+    /// The hierarchy of the bodies' boxes that finds them.
+    boxes: SurfaceTree,
     /// Pairs that push, or are bound to, the same dynamic body this step.
     shared: Vec<(DeformableHandle, DeformableHandle)>,
     /// Pairs that step together this step: `pairs` and `shared`.
@@ -416,8 +418,8 @@ impl DeformablePipeline {
         let pairs_start = Instant::now();
         islands::pairs(
             deformables,
-            ctx.dt,
-            ctx.settings.sleep_speed,
+            (ctx.dt, ctx.settings.sleep_speed),
+            &mut work.boxes,
             &mut work.pairs,
         );
         touching_pairs(deformables, &mut work.touching_before);
