@@ -38,8 +38,8 @@
 //! out); the depth limit keeps a node at a sharp corner of the rest shape from being pushed
 //! through the face beside it.
 //!
-//! **Broad phase.** Each body's facet boxes swept over the step go into a BVH (parry's), built
-//! once per step; each surface node of the others (and of itself, with self contact) queries
+//! **Broad phase.** Each body's facet boxes swept over the step go into a BVH (parry's),
+//! refitted each step; each surface node of the others (and of itself, with self contact) queries
 //! it with its own swept box. (Boxes widened by the speed in every direction, so that a body
 //! turned by a collision within the step is still seen, changed nothing measurable in a pile
 //! and made a resting stack sway faster; not kept.)
