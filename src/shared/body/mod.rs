@@ -64,6 +64,12 @@ impl Deformable {
         super::model::substep_under(estimate, certain, safety, calibrated).min(limiter)
     }
 
+    /// Measures now what calibrating its stability bounds needs (once per body; otherwise on
+    /// first use).
+    pub(crate) fn calibrate(&self) {
+        let _ = self.rest.slack(&self.state.elements);
+    }
+
     /// The stability bounds (calibrated if asked, and as they are) and the crossing limiter.
     fn bounds(&self, calibrated: bool) -> (Real, Real, Real) {
         let mut state = self.state.elements.clone();

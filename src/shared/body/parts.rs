@@ -74,6 +74,12 @@ impl Rest {
         })
     }
 
+    /// Whether [`Rest::slack`] has been measured.
+    #[cfg(test)]
+    pub fn calibrated(&self) -> bool {
+        self.slack.get().is_some()
+    }
+
     /// The facets each surface node leaves alone in self contact (its own and its
     /// neighbours'), made on first use.
     pub fn near_facets(&self) -> &NearFacets {
