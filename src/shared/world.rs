@@ -56,14 +56,14 @@ impl DeformableWorld {
     /// which its report says (`substep_cap_hit`, `lost_time`). [`DeformableWorld::try_insert`]
     /// refuses it instead.
     ///
-    /// A body the explicit step (or [`Integrator::Auto`]'s choice) will step has its stability
-    /// bounds calibrated here, once, rather than in its first step: that took 10 ms for each
-    /// shape-matched pad of `scenes pinch`, whose first step at 1 ms then took five times its
-    /// median step.
+    /// A body whose explicit substeps follow its calibrated stability bound (or on which
+    /// [`Integrator::Auto`] chooses by it) has that bound calibrated here, once, rather than in
+    /// its first step: that took 10 ms for each shape-matched pad of `scenes pinch`, whose first
+    /// step at 1 ms then took five times its median step.
     pub fn insert(&mut self, deformable: Deformable) -> DeformableHandle {
-        let integrator = self.pipeline.settings.integrator;
-        if matches!(integrator, Integrator::Auto { .. })
-            || !integrator.steps_implicitly(&deformable)
+        let settings = &self.pipeline.settings;
+        if matches!(settings.integrator, Integrator::Auto { .. })
+            || settings.calibrates(&deformable)
         {
             deformable.calibrate();
         }
@@ -79,8 +79,7 @@ impl DeformableWorld {
     ) -> Result<DeformableHandle, (Box<Deformable>, BuildError)> {
         let settings = self.pipeline.settings;
         let dt = self.physics.integration_parameters.dt;
-        let calibrated =
-            !settings.integrator.steps_implicitly(&deformable) && !deformable.self_contact();
+        let calibrated = settings.calibrates(&deformable);
         let substep = deformable.substep(settings.safety, calibrated);
         let substeps = f64::from(dt) / f64::from(substep);
         let fits = substeps.partial_cmp(&(settings.max_substeps as f64))
@@ -201,18 +200,20 @@ mod tests {
 
     #[test]
     fn insertion_calibrates_a_body_the_explicit_step_takes_and_no_other() {
-        for (integrator, calibrated) in [
-            (Integrator::Explicit, true),
-            (Integrator::Auto { iterations: 2 }, true),
-            (Integrator::Implicit { iterations: 2 }, false),
+        for (integrator, fixed, calibrated) in [
+            (Integrator::Explicit, None, true),
+            (Integrator::Explicit, Some(10), false),
+            (Integrator::Auto { iterations: 2 }, None, true),
+            (Integrator::Implicit { iterations: 2 }, None, false),
         ] {
             let mut world = DeformableWorld::new();
             world.pipeline.settings.integrator = integrator;
+            world.pipeline.settings.fixed_substeps = fixed;
             let h = world.insert(cube());
             assert_eq!(
                 world.deformables[h].rest.calibrated(),
                 calibrated,
-                "{integrator:?}"
+                "{integrator:?}, fixed substeps {fixed:?}"
             );
         }
     }

@@ -67,9 +67,11 @@ impl Guard {
     }
 
     /// After the substeps: whether the step gained energy or sank a node into another body
-    /// beyond the bounds.
-    pub fn failed(&self, members: &[Member<'_, '_>], ctx: &StepContext<'_>) -> bool {
+    /// beyond the bounds; `taken`: the kinetic energy the damping of held bodies took within
+    /// the substeps, counted back.
+    pub fn failed(&self, members: &[Member<'_, '_>], ctx: &StepContext<'_>, taken: Real) -> bool {
         let (now, _) = energy(members, ctx);
+        let now = now + taken;
         if now > self.energy + ENERGY_SHARE * self.scale {
             return true;
         }

@@ -166,6 +166,18 @@ impl Default for PipelineSettings {
     }
 }
 
+impl PipelineSettings {
+    /// Whether the explicit step sizes `body`'s substeps by its calibrated stability bound
+    /// when it steps alone (its slack measured once, `model/slack.rs`): not under fixed
+    /// substeps, with self contact (whose contacts want the certain bound), or when the body
+    /// steps implicitly.
+    pub(crate) fn calibrates(&self, body: &Deformable) -> bool {
+        self.fixed_substeps.is_none()
+            && !body.self_contact()
+            && !self.integrator.steps_implicitly(body)
+    }
+}
+
 /// Steps deformables beside a rapier world. Holds only settings and scratch buffers.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, Default)]
@@ -599,7 +611,7 @@ fn step_group<'a>(
         m.body.step.global_iterations = ctx.settings.global_iterations;
     }
     let guard = together.then(|| Guard::start(members, ctx)).flatten();
-    let mut undamped = substep::run(
+    let (mut undamped, mut taken) = substep::run(
         &integrator,
         members,
         (soft, together.then_some(1)),
@@ -613,11 +625,11 @@ fn step_group<'a>(
             (Integrator::Explicit, None),
         ];
         for (integrator, together) in retries {
-            if !guard.failed(members, ctx) {
+            if !guard.failed(members, ctx, taken) {
                 break;
             }
             guard.roll_back(members, bodies);
-            undamped = substep::run(&integrator, members, (soft, together), ctx, bodies);
+            (undamped, taken) = substep::run(&integrator, members, (soft, together), ctx, bodies);
         }
     }
     damp_held(members, ctx, undamped);
@@ -640,16 +652,26 @@ fn step_group<'a>(
 }
 
 /// The damping of deformables held against each other ([`held`]) over the last `dt` of the
-/// step, on the last substep's contacts.
+/// step, on the last substep's contacts; returns the kinetic energy it took.
 ///
 /// Not under the midpoint setting: damped so, the 3D pile of ten shape-matched cubes
 /// (`scenes pile`, 60 Hz) does not settle in 3 s (1.4 mm inside each other, 3.5 cm/s), where
 /// undamped it sleeps 0.4 mm inside; why is not known yet.
-fn damp_held(members: &mut [Member<'_, '_>], ctx: &StepContext<'_>, dt: Real) {
+fn damp_held(members: &mut [Member<'_, '_>], ctx: &StepContext<'_>, dt: Real) -> Real {
     let midpoint = matches!(ctx.settings.integrator, Integrator::Midpoint { .. });
-    if ctx.settings.damp_held && !midpoint {
-        held::damp(members, dt, ctx.settings.sleep_speed);
+    if !ctx.settings.damp_held || midpoint {
+        return 0.0;
     }
+    let kinetic = |members: &[Member<'_, '_>]| -> Real {
+        members
+            .iter()
+            .filter(|m| m.live)
+            .map(|m| m.body.kinetic_energy())
+            .sum()
+    };
+    let before = kinetic(members);
+    held::damp(members, dt, ctx.settings.sleep_speed);
+    (before - kinetic(members)).max(0.0)
 }
 
 /// Phases 4–5 of a live member's step and its still time (phase 6); whether it has been still

@@ -101,16 +101,17 @@ pub(super) struct Member<'m, 'a> {
 /// the members meet each other's surfaces (and their own, with self contact) every substep,
 /// inside the integrator's solve with `together` ([`step_together`], in at least that many
 /// substeps), else on the velocities after it ([`soft_contacts`]). Deformables held against
-/// each other are damped ([`held`](super::held)) on a substep's contacts each
-/// [`HELD_PERIOD`] of the step; returns the time since the last such pass, for the pass at
-/// the step's end.
+/// each other are damped ([`held`](super::held)) on the contacts of the substep that ends each
+/// share of the step [`HELD_PERIOD`] long. Returns the time since the last such pass, for the
+/// pass at the step's end, and the kinetic energy the passes took (the guard of an island
+/// solved together counts it back: a pass must not hide energy the solve made).
 pub(super) fn run(
     integrator: &impl Integrate,
     members: &mut [Member<'_, '_>],
     (soft, together): (bool, Option<usize>),
     ctx: &StepContext<'_>,
     bodies: &mut RigidBodySet,
-) -> Real {
+) -> (Real, Real) {
     let dt = ctx.dt;
     let live: Vec<usize> = (0..members.len()).filter(|&i| members[i].live).collect();
     // The motions are read all through the loop while the other buffers change.
@@ -121,60 +122,59 @@ pub(super) fn run(
     let mut t = 0.0;
     let mut substeps = 0;
     let passes = (dt / HELD_PERIOD).ceil().max(1.0);
-    let mut damped = 0.0;
+    let (mut damped, mut taken) = (0.0, 0.0);
     while let Some(h) = next_substep(integrator, members, &live, ctx, dt - t, substeps) {
-        if t > damped && (t * passes / dt).floor() > (damped * passes / dt).floor() {
-            super::damp_held(members, ctx, t - damped);
-            damped = t;
-        }
         for m in members.iter_mut() {
             m.held.clear();
         }
-        if let Some(pieces) = together {
+        let h = if let Some(pieces) = together {
             let h = h
                 .min(motion_bound(members, dt - t))
                 .min(dt / pieces as Real);
             let at = substep_at(ctx, 0.0, h, t, &[]);
             step_together(integrator, members, (&live, &motions), ctx, &at, bodies);
             rigid_passes(members, &live, ctx, (h, t), &motions, false, bodies);
-            move_positions(integrator, members, &live, h);
-            t += h;
-            substeps += 1;
-            continue;
-        }
-        for j in 0..live.len() {
-            let i = live[order(substeps % 2 == 1, live.len(), j)];
-            let m = &mut members[i];
-            let at = substep_at(ctx, m.sc.broad.skin, h, t, &motions[i]);
-            advance(integrator, m, ctx, &at, bodies, false);
-        }
-        rigid_passes(
-            members,
-            &live,
-            ctx,
-            (h, t),
-            &motions,
-            substeps % 2 == 1,
-            bodies,
-        );
-        if soft {
-            let at = substep_at(ctx, 0.0, h, t, &[]);
-            soft_contacts(members, &at, substeps % 2 == 1);
-        }
-
+            h
+        } else {
+            for j in 0..live.len() {
+                let i = live[order(substeps % 2 == 1, live.len(), j)];
+                let m = &mut members[i];
+                let at = substep_at(ctx, m.sc.broad.skin, h, t, &motions[i]);
+                advance(integrator, m, ctx, &at, bodies, false);
+            }
+            rigid_passes(
+                members,
+                &live,
+                ctx,
+                (h, t),
+                &motions,
+                substeps % 2 == 1,
+                bodies,
+            );
+            if soft {
+                let at = substep_at(ctx, 0.0, h, t, &[]);
+                soft_contacts(members, &at, substeps % 2 == 1);
+            }
+            h
+        };
         move_positions(integrator, members, &live, h);
         t += h;
         substeps += 1;
+        if t < dt && (t * passes / dt).floor() > (damped * passes / dt).floor() {
+            taken += super::damp_held(members, ctx, t - damped);
+            damped = t;
+        }
     }
     for (m, motions) in members.iter_mut().zip(motions) {
         m.sc.broad.motions = motions;
     }
-    t - damped
+    (t - damped, taken)
 }
 
-/// The longest stretch of a step between two passes of the damping of held deformables. A pass
-/// sees the contacts of one substep only, so once a long step it misses bodies that bounce
-/// apart and press together again within the step (`docs/ARCHITECTURE.md` §6.10).
+/// The period the damping of held deformables aims at within a step: the step is cut into
+/// `ceil(dt / HELD_PERIOD)` equal shares, and a pass runs after the substep that ends each.
+/// A pass sees the contacts of one substep only: run once per long step, it would miss bodies
+/// that bounce apart and press together again within it (`docs/ARCHITECTURE.md` §6.10).
 pub(super) const HELD_PERIOD: Real = 2e-3;
 
 /// Most substeps an island solved together takes in a step.
@@ -582,10 +582,7 @@ fn next_substep(
             m.stats.implicit = true;
         }
         // (Fixed substeps need no bound: the body's slack is not measured for them.)
-        let calibrated = alone
-            && ctx.settings.fixed_substeps.is_none()
-            && !m.body.self_contact()
-            && !ctx.settings.integrator.steps_implicitly(m.body);
+        let calibrated = alone && ctx.settings.calibrates(m.body);
         let bound = integrator.bound(m.body, calibrated);
         match substep_size(bound, calibrated, ctx, remaining, &mut m.stats) {
             Some(hi) => h = h.min(hi),
