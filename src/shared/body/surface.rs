@@ -10,10 +10,9 @@ use super::super::mesh::Mesh;
 use super::super::rapier::geometry::Aabb;
 use super::super::rapier::parry::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 
-/// A hierarchy of boxes refitted while their count stays. A body's surface: one leaf per
+/// A hierarchy of boxes refitted while their count stays; for a body's surface, one leaf per
 /// boundary facet (leaf index = the facet's index in [`Mesh::boundary_facets`]), each the
-/// facet's box; also the facets' swept boxes of soft contact and the bodies' boxes the islands
-/// are found from ([`SurfaceTree::set`]).
+/// facet's box.
 #[derive(Clone, Default)]
 pub(crate) struct SurfaceTree {
     bvh: Bvh,

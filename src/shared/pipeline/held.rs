@@ -51,10 +51,11 @@ const PATCH_SHARE: Real = 0.15;
 
 /// Damps the rigid motion of each composite's members toward its target over `dt` (module
 /// docs); `still`: the speed under which bodies count as not slipping (the sleep speed).
-pub(super) fn damp(members: &mut [Member<'_, '_>], dt: Real, still: Real) {
+/// Returns the kinetic energy it took.
+pub(super) fn damp(members: &mut [Member<'_, '_>], dt: Real, still: Real) -> Real {
     let n = members.len();
     if n < 2 || dt <= 0.0 {
-        return;
+        return 0.0;
     }
     // The pairs that touched in the last substep, each once.
     let mut pairs: Vec<(usize, usize)> = members
@@ -63,7 +64,7 @@ pub(super) fn damp(members: &mut [Member<'_, '_>], dt: Real, still: Real) {
         .flat_map(|(i, m)| m.held.iter().map(move |h| (i.min(h.other), i.max(h.other))))
         .collect();
     if pairs.is_empty() {
-        return;
+        return 0.0;
     }
     pairs.sort_unstable();
     pairs.dedup();
@@ -88,14 +89,24 @@ pub(super) fn damp(members: &mut [Member<'_, '_>], dt: Real, still: Real) {
         }
     }
     if !any {
-        return;
+        return 0.0;
     }
+    let mut taken = 0.0;
     for r in 0..n {
         let composite: Vec<usize> = (0..n).filter(|&i| root(&mut parent, i) == r).collect();
         if composite.len() > 1 {
+            let kinetic = |members: &[Member<'_, '_>]| -> Real {
+                composite
+                    .iter()
+                    .map(|&i| members[i].body.kinetic_energy())
+                    .sum()
+            };
+            let before = kinetic(members);
             damp_composite(members, &composite, &fits, (dt, still));
+            taken += (before - kinetic(members)).max(0.0);
         }
     }
+    taken
 }
 
 fn root(parent: &mut [usize], mut i: usize) -> usize {

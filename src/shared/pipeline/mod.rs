@@ -662,16 +662,7 @@ fn damp_held(members: &mut [Member<'_, '_>], ctx: &StepContext<'_>, dt: Real) ->
     if !ctx.settings.damp_held || midpoint {
         return 0.0;
     }
-    let kinetic = |members: &[Member<'_, '_>]| -> Real {
-        members
-            .iter()
-            .filter(|m| m.live)
-            .map(|m| m.body.kinetic_energy())
-            .sum()
-    };
-    let before = kinetic(members);
-    held::damp(members, dt, ctx.settings.sleep_speed);
-    (before - kinetic(members)).max(0.0)
+    held::damp(members, dt, ctx.settings.sleep_speed)
 }
 
 /// Phases 4–5 of a live member's step and its still time (phase 6); whether it has been still
