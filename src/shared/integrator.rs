@@ -199,11 +199,14 @@ pub enum Integrator {
     /// bound to bones (unless
     /// [`PipelineSettings::global_iterations`](super::PipelineSettings::global_iterations)
     /// solves them whole: their bones do work, so no budget guards them and their solve must
-    /// converge), steps in which a contact may act, and islands solved with their contacts
-    /// take backward Euler as [`Integrator::Implicit`] does, with the same `iterations`; but a body (no bone, no other deformable near, no self contact) whose
-    /// centre of mass closes on a collider faster than the restitution threshold plus twice
-    /// what gravity adds in a step takes that impact in explicit substeps, until it leaves the
-    /// collider (or 0.1 s after it stopped closing), so that it bounces as it would at 1 ms
+    /// converge), steps in which a contact acts (or may act on a body still ringing from a
+    /// contact), and islands solved with their contacts take backward Euler as
+    /// [`Integrator::Implicit`] does, with the same `iterations`; but a body (no bone, no other
+    /// deformable near, no self contact) whose centre of mass closes on a collider faster than
+    /// the restitution threshold plus twice what gravity adds in a step takes that impact in
+    /// explicit substeps, from the step in which one of its nodes may strike the collider
+    /// until it leaves it (at most 0.1 s after the last strike), so that it bounces as it
+    /// would at 1 ms
     /// (`pipeline/impact.rs`; with fixed substeps, or if the explicit step would take more
     /// than 1000 substeps a step, it keeps the implicit one). A snapshot keeps the step's
     /// state between steps (`θ`, the energy budget, the impact).
@@ -301,32 +304,12 @@ impl Integrate for Integrator {
         // Bound nodes keep the velocity the last bone drive gave them; the drive follows. When
         // contacts follow, this solve only tells them where the body is going (the solve after
         // them starts afresh): one sweep.
-        if self.midpoint_rule()
-            && !contacts_follow
-            && (body.bindings.len() == 0 || body.step.global_iterations > 0)
-        {
-            // A body nothing touches: the midpoint step, or backward Euler if carrying its
-            // motion on would flatten a cell. Bound nodes are held where their bones are at
-            // `θ h`.
-            let theta = midpoint::begin(body);
-            let held = held_nodes(body, theta * h, None);
-            implicit_pass(
-                body,
-                g,
-                theta * h,
-                iterations,
-                &held,
-                false,
-                &mut Vec::new(),
-            );
-            if !midpoint::keeps_cells(body, h, theta) {
-                midpoint::as_backward_euler(body);
-                let held = held_nodes(body, h, None);
-                implicit_pass(body, g, h, iterations, &held, false, &mut Vec::new());
-            }
-            return;
+        if self.midpoint_rule() && !contacts_follow && takes_midpoint(body) {
+            return midpoint_pass(body, g, h, iterations);
         }
-        body.step.midpoint.forget();
+        if !contacts_follow {
+            body.step.midpoint.forget();
+        }
         let held = held_nodes(body, h, None);
         if contacts_follow {
             // Where the body is going, for the contacts: the solve after them starts afresh,
@@ -383,6 +366,14 @@ impl Integrate for Integrator {
             // others answer them in the same step, from the start.
             let warm = !at.touched.is_empty();
             implicit_pass(body, g, h, iterations, &held, warm, reactions);
+        } else if self.midpoint_rule() && takes_midpoint(body) && body.step.midpoint.in_flight() {
+            // No contact acted on a body in flight by the midpoint step (not one still ringing
+            // from a contact or an impact, which backward Euler settles): its step, from the
+            // start.
+            body.state
+                .velocities
+                .copy_from_slice(&body.step.scratch_velocities);
+            midpoint_pass(body, g, h, iterations);
         } else if iterations > 1 {
             // No contact acted: the prediction was the step; it takes the remaining sweeps.
             implicit_pass(body, g, h, iterations - 1, &held, true, reactions);
@@ -634,6 +625,34 @@ fn held_nodes(body: &Deformable, h: Real, after: Option<AfterContacts<'_>>) -> V
             }
         })
         .collect()
+}
+
+/// Whether `body` takes the midpoint step where nothing touches it: a body bound to bones only
+/// when it is solved whole (`integrator/midpoint.rs` tells why).
+fn takes_midpoint(body: &Deformable) -> bool {
+    body.bindings.len() == 0 || body.step.global_iterations > 0
+}
+
+/// The midpoint step of a body nothing touches, from its velocities at the start of the step,
+/// or backward Euler if carrying its motion on would flatten a cell. Bound nodes are held where
+/// their bones are at `θ h`.
+fn midpoint_pass(body: &mut Deformable, g: Vector, h: Real, iterations: usize) {
+    let theta = midpoint::begin(body);
+    let held = held_nodes(body, theta * h, None);
+    implicit_pass(
+        body,
+        g,
+        theta * h,
+        iterations,
+        &held,
+        false,
+        &mut Vec::new(),
+    );
+    if !midpoint::keeps_cells(body, h, theta) {
+        midpoint::as_backward_euler(body);
+        let held = held_nodes(body, h, None);
+        implicit_pass(body, g, h, iterations, &held, false, &mut Vec::new());
+    }
 }
 
 /// One implicit solve of `body` over `h` (free nodes from their velocity at the start of the

@@ -21,12 +21,12 @@ fn throw_world(
     speed: Real,
     e: Real,
 ) -> (DeformableWorld, DeformableHandle) {
-    throw_world_of(1e5, model, integrator, dt, speed, e)
+    throw_world_of((1e5, 0.0), model, integrator, dt, speed, e)
 }
 
-/// [`throw_world`] with Young's modulus `young`.
+/// [`throw_world`] with Young's modulus `young` and the wall `farther` away.
 fn throw_world_of(
-    young: Real,
+    (young, farther): (Real, Real),
     model: ElementModel,
     integrator: Integrator,
     dt: Real,
@@ -40,7 +40,7 @@ fn throw_world_of(
     let mut half = Vector::splat(2.0);
     half[0] = 0.5;
     world.physics.insert(
-        RigidBodyBuilder::fixed().translation(Vector::X * 0.8),
+        RigidBodyBuilder::fixed().translation(Vector::X * (0.8 + farther)),
         ColliderBuilder::new(SharedShape::new(Cuboid::new(half)))
             .restitution(e)
             .friction(0.5),
@@ -63,17 +63,17 @@ fn throw_world_of(
     (world, h)
 }
 
-/// [`throw_world`] run for 0.4 s (in `substeps` fixed substeps a step, or the automatic ones):
-/// the rebound speed over the throw's and the most inverted cells.
+/// [`throw_world`] with the wall `farther` away, run for 0.4 s (in `substeps` fixed substeps a
+/// step, or the automatic ones): the rebound speed over the throw's and the most inverted
+/// cells.
 fn throw(
     model: ElementModel,
-    integrator: Integrator,
-    dt: Real,
-    substeps: Option<usize>,
+    (integrator, dt, substeps): (Integrator, Real, Option<usize>),
     speed: Real,
     e: Real,
+    farther: Real,
 ) -> (Real, usize) {
-    let (mut world, h) = throw_world(model, integrator, dt, speed, e);
+    let (mut world, h) = throw_world_of((1e5, farther), model, integrator, dt, speed, e);
     world.pipeline.settings.fixed_substeps = substeps;
     let mut inverted = 0;
     for _ in 0..(0.4 / dt).round() as usize {
@@ -87,20 +87,55 @@ fn throw(
 #[test]
 fn a_ball_thrown_at_a_wall_at_60_hz_leaves_it_as_at_1_ms() {
     // Backward Euler at 60 Hz leaves at −0.02 to 0.01 of the throw's speed (it sticks); the
-    // midpoint step, its impact taken explicitly, within 5 % of the explicit step converged in
-    // its substeps (1 ms in 8: within 0.5 % of 16; the automatic 2–3 vary by ±3 %).
+    // midpoint step, its impact taken explicitly, near the explicit step converged in its
+    // substeps (1 ms in 8: within 0.5 % of 16). The explicit step at its automatic substeps
+    // itself leaves up to 11 % below and 6 % above that, by where in a step the contact begins
+    // (the wall moved by millimetres), so each wall is held to 10 % and their mean to 5 %.
     for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
         for (speed, e) in [(5.0, 0.8), (5.0, 0.0), (2.0, 0.8)] {
             let name = format!("{} at {speed} m/s, e = {e}", model.name());
-            let (reference, _) = throw(model, Integrator::Explicit, 1e-3, Some(8), speed, e);
-            let midpoint = Integrator::Midpoint { iterations: 2 };
-            let (rebound, inverted) = throw(model, midpoint, 1.0 / 60.0, None, speed, e);
-            assert!(reference > 0.5, "{name}: the reference left at {reference}");
+            let midpoint = (Integrator::Midpoint { iterations: 2 }, 1.0 / 60.0, None);
+            let mut off = Vec::new();
+            for farther in [0.0, 0.002, 0.005, 0.01] {
+                let converged = (Integrator::Explicit, 1e-3, Some(8));
+                let (reference, _) = throw(model, converged, speed, e, farther);
+                let (rebound, inverted) = throw(model, midpoint, speed, e, farther);
+                assert!(reference > 0.5, "{name}: the reference left at {reference}");
+                off.push(rebound / reference - 1.0);
+                assert_eq!(inverted, 0, "{name}");
+            }
+            let mean = off.iter().sum::<Real>() / off.len() as Real;
             assert!(
-                (rebound - reference).abs() <= 0.05 * reference,
-                "{name}: left at {rebound} of its speed, {reference} converged"
+                off.iter().all(|o| o.abs() <= 0.1) && mean.abs() <= 0.05,
+                "{name}: left off the converged rebound by {off:?}"
             );
-            assert_eq!(inverted, 0, "{name}");
+        }
+    }
+}
+
+#[test]
+fn the_midpoint_step_takes_only_the_steps_of_the_contact_explicitly() {
+    // At 5 m/s the ball reaches the wall as its third 60 Hz step ends (at 2 m/s within its
+    // eighth) and is in contact for about a step: its flight is implicit up to the step of the
+    // contact, and from the step after the one that carries it off.
+    for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
+        for (speed, contact) in [(5.0, 3), (2.0, 8)] {
+            let name = format!("{} at {speed} m/s", model.name());
+            let midpoint = Integrator::Midpoint { iterations: 2 };
+            let (mut world, h) = throw_world(model, midpoint, 1.0 / 60.0, speed, 0.8);
+            let mut explicit = Vec::new();
+            for k in 1..=40 {
+                world.step();
+                if !world.deformables[h].report().implicit {
+                    explicit.push(k);
+                }
+            }
+            let rebound = -world.deformables[h].center_of_mass_velocity().x / speed;
+            assert!(rebound > 0.5, "{name}: left at {rebound}");
+            assert!(
+                explicit.first() == Some(&contact) && explicit.len() <= 4,
+                "{name}: explicit in steps {explicit:?}"
+            );
         }
     }
 }
@@ -149,7 +184,8 @@ fn a_ball_thrown_at_twice_the_speed_of_sound_in_it_creates_no_energy() {
     for (young, speed) in [(1e6, 60.0), (1e5, soft)] {
         let model = ElementModel::EdgeRepulsion;
         let dt = 1e-3;
-        let (mut world, h) = throw_world_of(young, model, Integrator::Explicit, dt, speed, 0.8);
+        let explicit = Integrator::Explicit;
+        let (mut world, h) = throw_world_of((young, 0.0), model, explicit, dt, speed, 0.8);
         let start = world.deformables[h].kinetic_energy();
         let (mut peak, mut substeps): (Real, usize) = (0.0, 0);
         for _ in 0..(0.08 / dt).round() as usize {

@@ -11,17 +11,25 @@
 //! substep. So the impact takes the explicit step, whose rebound is the reference, and the
 //! flight before and after it the midpoint step.
 //!
-//! A body is in an impact from the step that starts with its centre of mass closing on a
-//! candidate collider faster than [`PipelineSettings::restitution_threshold`] plus twice what
-//! gravity adds in a step, to the body and to a dynamic collider (a body resting on a floor,
-//! or a box resting on it, closes by `g h` each step, which the contact takes back), the
-//! closing measured along the line from the collider's point nearest to the centre of mass: a
-//! tumbling body whose corner strikes while its centre hardly closes is not in an impact. It
-//! stays in it while closing and, once that stops, while it still touches a collider, for at
-//! most [`SETTLE`]. A body bound to a bone, in an island with other deformables or with self
-//! contact on, stepped with [`PipelineSettings::fixed_substeps`], or whose explicit step would
-//! take more than [`MAX_SUBSTEPS`] substeps a step (or `max_substeps`) keeps the implicit step
-//! (backward Euler in the steps with contact candidates).
+//! A body is in an impact from the step that starts with
+//! - its centre of mass closing on a candidate collider faster than the threshold,
+//!   [`PipelineSettings::restitution_threshold`] plus twice what gravity adds in a step, to
+//!   the body and to a dynamic collider (a body resting on a floor, or a box resting on it,
+//!   closes by `g h` each step, which the contact takes back), the closing measured along the
+//!   line from the collider's point nearest to the centre of mass (a tumbling body whose
+//!   corner strikes while its centre hardly closes is not in an impact), and
+//! - a boundary node that does not touch the collider yet, closing on it faster than the
+//!   threshold and near enough to meet it within the step ([`strikes`]).
+//!
+//! So a body's flight up to the step of the contact is the midpoint step's, and a body
+//! pivoting on an edge that touches (its centre closing, the nodes about the edge hardly
+//! moving) is not in an impact until its face comes down. It stays in it while closing or
+//! while it touches a collider (in any substep of the last step: a body that has just left
+//! still rings, and its nodes strike again), for at most [`SETTLE`] after the last step that
+//! began with a strike. A body bound to a bone, in an island with other deformables or with
+//! self contact on, stepped with [`PipelineSettings::fixed_substeps`], or whose explicit step
+//! would take more than [`MAX_SUBSTEPS`] substeps a step (or `max_substeps`) keeps the
+//! implicit step.
 //!
 //! [`PipelineSettings::restitution_threshold`]: super::PipelineSettings::restitution_threshold
 //! [`PipelineSettings::fixed_substeps`]: super::PipelineSettings::fixed_substeps
@@ -32,9 +40,13 @@ use super::super::rapier::dynamics::RigidBodySet;
 use super::substep::Member;
 use super::StepContext;
 
-/// How long a body that stopped closing on a collider but still touches one stays in its
-/// impact (s): the rebound of a body that lands and stays is over by then.
+/// How long a body stays in its impact after the last step that began with a strike, at most
+/// (s): the rebound of a body that lands and stays is over by then.
 pub(crate) const SETTLE: Real = 0.1;
+
+/// A node nearer a collider than this share of what it may close on it in a step touches it
+/// already (contacts leave nodes on the surface).
+const TOUCHING: Real = 1e-3;
 
 /// Most explicit substeps a step may take for an impact: a body stiffer than that for its
 /// mass and the step (the 10 cm silicone ball of `scenes ball`, E = 10⁶ Pa, takes 260 at
@@ -65,7 +77,10 @@ pub(super) fn any(
         let state = &m.body.step.midpoint;
         let (left, too_stiff) = (state.impact, state.too_stiff);
         let mut refused = false;
-        let left = if closing > threshold && left <= 0.0 && !too_stiff {
+        // A body closing fast flies by the midpoint step up to the step in which a node may
+        // strike the collider.
+        let strike = closing > threshold && !too_stiff && strikes(m, ctx, bodies, threshold);
+        let left = if strike && left <= 0.0 {
             // Whether the explicit step is affordable is asked once, as an impact starts.
             let substep = m.body.substep(settings.safety, false);
             refused = ctx.dt > substep * most;
@@ -74,9 +89,9 @@ pub(super) fn any(
             } else {
                 SETTLE
             }
-        } else if closing > threshold && left > 0.0 {
+        } else if strike {
             SETTLE
-        } else if touching {
+        } else if left > 0.0 && (closing > threshold || touching) {
             (left - ctx.dt).max(0.0)
         } else {
             0.0
@@ -130,4 +145,40 @@ fn closing_speed(m: &Member<'_, '_>, ctx: &StepContext<'_>, bodies: &RigidBodySe
         }
     }
     (fastest, pull)
+}
+
+/// Whether a boundary node of `m` not yet touching one of its candidate colliders closes on it
+/// faster than `threshold` and may meet it within the step: it is within what it closes on the
+/// collider in the step (its own speed towards the nearest point, plus what gravity and the
+/// collider's body's drift add), with a tenth more for the speed the step's forces add. A body
+/// pivoting on a corner or an edge (its centre closing while the nodes about the pivot hardly
+/// move) strikes only when another part of it comes down.
+fn strikes(
+    m: &Member<'_, '_>,
+    ctx: &StepContext<'_>,
+    bodies: &RigidBodySet,
+    threshold: Real,
+) -> bool {
+    let g = (ctx.gravity * m.body.gravity_scale).length();
+    let dt = ctx.dt;
+    let motions = &m.sc.broad.motions;
+    let (x, v) = (m.body.positions(), m.body.velocities());
+    m.candidates.iter().any(|cand| {
+        let pull = cand.drift.length();
+        let shape = cand.collider.shape();
+        m.body.rest.mesh.boundary_nodes().iter().any(|&i| {
+            let p = x[i as usize];
+            let proj = shape.project_point(&cand.pose, p, true);
+            let away = p - proj.point;
+            let distance = away.length();
+            if proj.is_inside || distance.is_nan() {
+                return false;
+            }
+            let normal = away / distance;
+            let wall = cand.point_velocity(proj.point, 0.0, dt, motions, bodies);
+            let closing = -(v[i as usize] - wall).dot(normal);
+            let reach = 1.1 * (closing.max(0.0) + (g + pull) * dt) * dt;
+            closing > threshold && distance > TOUCHING * reach && distance <= reach
+        })
+    })
 }
