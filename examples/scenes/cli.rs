@@ -147,7 +147,7 @@ pub struct Args {
     pub sweeps: Option<usize>,
     /// Conjugate-gradient iterations of the implicit steps' Newton step over each whole body,
     /// before the sweeps (`PipelineSettings::global_iterations`; fall, cantilever, bending and roll;
-    /// default 0: none).
+    /// default: automatic, 0: none).
     #[arg(long)]
     pub global: Option<usize>,
     /// Bodies of the pile, one run per count (default: 10).
@@ -654,7 +654,7 @@ macro_rules! dimension_runner {
                         },
                         _ => Integrator::Explicit,
                     },
-                    global_iterations: args.global.unwrap_or(0),
+                    global_iterations: args.global,
                     ..d
                 }
             }
@@ -966,7 +966,7 @@ macro_rules! dimension_runner {
                                     subject,
                                     box_mass: mass as Real,
                                     integrator: cube.integrator,
-                                    global_iterations: args.global.unwrap_or(0),
+                                    global_iterations: args.global,
                                     dt: args.dt.map_or(d.dt, |v| v as Real),
                                     seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                     material: material(args, d.material),
@@ -1060,7 +1060,7 @@ macro_rules! dimension_runner {
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
                                 integrator: cube.integrator,
-                                global_iterations: args.global.unwrap_or(0),
+                                global_iterations: args.global,
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
@@ -1075,7 +1075,7 @@ macro_rules! dimension_runner {
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
                                 integrator: cube.integrator,
-                                global_iterations: args.global.unwrap_or(0),
+                                global_iterations: args.global,
                                 ..d
                             };
                             vec![scene.ring().map_err(err)?]

@@ -181,10 +181,11 @@ pub enum Integrator {
     /// A few sweeps do not converge on a stiff, slender body, whose bending carries a load
     /// across many cells: released under its weight, the 10:1 cantilever of `scenes bending`
     /// (E = 10⁸ Pa, 1000 kg/m³, 5 nodes across) hangs straight at 60 Hz even with 50 sweeps.
-    /// [`PipelineSettings::global_iterations`](super::PipelineSettings::global_iterations)
-    /// adds a Newton step over the whole body before the sweeps: with 10 it rings at 4.8 Hz
-    /// (Euler–Bernoulli: 5.1; shape matching 4.9) about 13.0–13.6 mm of sag (14.9), about 30×
-    /// cheaper than the explicit step.
+    /// A Newton step over the whole body before the sweeps
+    /// ([`PipelineSettings::global_iterations`](super::PipelineSettings::global_iterations),
+    /// taken by default by bodies that stiff for the step, [`GLOBAL_SUBSTEPS`]) makes it ring at
+    /// 4.8 Hz (Euler–Bernoulli: 5.1; shape matching 4.9) about 13.0–13.6 mm of sag (14.9),
+    /// about 30× cheaper than the explicit step.
     Implicit {
         /// Sweeps per step.
         iterations: usize,
@@ -243,6 +244,20 @@ pub enum Integrator {
 /// 1.0 against 0.9), and the explicit step is the more accurate, so it keeps bodies up to a
 /// little more than that.
 pub const AUTO_SUBSTEPS: usize = 4;
+
+/// Explicit substeps a step at rest above which the implicit steps take a Newton step over the
+/// whole body before their sweeps, unless
+/// [`PipelineSettings::global_iterations`](super::PipelineSettings::global_iterations) says
+/// otherwise: a body that stiff for the step (`k h²/m` large) is one whose soft modes a few
+/// Gauss–Seidel sweeps do not reach (the 10:1 cantilever of `scenes bending`, 746 at 60 Hz,
+/// hangs straight under 50 sweeps), where bodies under it (the `fall` cube at res 9, 90; the
+/// 10 cm silicone ball, 95; the pinch's pads, 125–302) move as they should without it, which
+/// costs them 2.5–4× their sweeps.
+pub const GLOBAL_SUBSTEPS: usize = 400;
+
+/// The Newton iterations a body takes over its whole when [`GLOBAL_SUBSTEPS`] asks for them:
+/// 5–10 converge the 10:1 cantilever.
+pub const AUTO_GLOBAL_ITERATIONS: usize = 10;
 
 impl Integrator {
     /// Whether the implicit steps are by the midpoint rule, with impacts taken explicitly.

@@ -66,7 +66,7 @@ use super::contact::soft::{self, SoftSurface};
 use super::contact::{Candidate, ContactMaterial, ContactPoint, Scan};
 use super::coupling::{self, BodyMotion, RigidBackup};
 use super::events::{DeformableContactEvent, DeformableEventHandler};
-use super::integrator::{Integrator, AUTO_SUBSTEPS};
+use super::integrator::{Integrator, AUTO_GLOBAL_ITERATIONS, AUTO_SUBSTEPS, GLOBAL_SUBSTEPS};
 use super::math::{Real, Vector};
 use super::rapier::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
 use super::rapier::geometry::{BroadPhaseBvh, ColliderHandle, ColliderSet};
@@ -117,8 +117,11 @@ pub struct PipelineSettings {
     /// Under the implicit and midpoint steps: conjugate-gradient iterations of one Newton step
     /// over each whole body before its Gauss–Seidel sweeps (`docs/ARCHITECTURE.md` §4.2), for
     /// bodies whose soft modes the sweeps cannot reach, such as a stiff slender beam at 60 Hz
-    /// (it hangs straight under the sweeps alone). 0, the default: the sweeps alone. Each
-    /// step assembles and factors a coarse system of at most 384 unknowns (32 clusters of
+    /// (it hangs straight under the sweeps alone). `None`, the default: automatic,
+    /// [`AUTO_GLOBAL_ITERATIONS`](super::AUTO_GLOBAL_ITERATIONS) for a body whose explicit step would take more than
+    /// [`GLOBAL_SUBSTEPS`](super::GLOBAL_SUBSTEPS) substeps a step at rest (the beam: 746 at 60 Hz), none otherwise
+    /// (the `fall` cube at res 9: 90; the 10 cm silicone ball of `scenes ball`: 95; the limb:
+    /// 3); `Some(0)`: the sweeps alone. Each step assembles and factors a coarse system of at most 384 unknowns (32 clusters of
     /// nodes, each moving affinely) and each iteration costs about a sweep: with 10, the
     /// 1 075-node beam of `scenes bending --res 5` costs 4–7× what its 2 sweeps cost alone;
     /// 5–10 iterations converge the beam.
@@ -127,7 +130,7 @@ pub struct PipelineSettings {
     /// it, `scenes advise --trial crush` (1000 kg on a soft cube) inverts edge-repulsion cells
     /// under backward Euler, which hold without it (the midpoint step holds either way).
     #[cfg_attr(feature = "serde", serde(default))]
-    pub global_iterations: usize,
+    pub global_iterations: Option<usize>,
     /// Whether deformables that rest on each other (pressed together over a face, not sliding)
     /// damp their rigid motions against each other, at a rate set by their materials' damping
     /// ratio, and such a stack resting on the ground its motion against the ground (default
@@ -160,7 +163,7 @@ impl Default for PipelineSettings {
             time_until_sleep: 0.5,
             integrator: Integrator::Explicit,
             teleport_speed: 50.0,
-            global_iterations: 0,
+            global_iterations: None,
             damp_held: true,
         }
     }
@@ -608,7 +611,7 @@ fn step_group<'a>(
         integrator
     };
     for m in members.iter_mut() {
-        m.body.step.global_iterations = ctx.settings.global_iterations;
+        m.body.step.global_iterations = global_iterations(m.body, ctx);
     }
     let guard = together.then(|| Guard::start(members, ctx)).flatten();
     let (mut undamped, mut taken) = substep::run(
@@ -690,6 +693,24 @@ fn check_member(
 }
 
 /// The deformables each live member touched this step (either's node on the other's facet).
+/// The Newton iterations over `body`'s whole before its sweeps this step
+/// ([`PipelineSettings::global_iterations`]).
+fn global_iterations(body: &Deformable, ctx: &StepContext<'_>) -> usize {
+    let settings = &ctx.settings;
+    if let Some(n) = settings.global_iterations {
+        return n;
+    }
+    if !settings.integrator.steps_implicitly(body) {
+        return 0;
+    }
+    let at_rest = body.rest.slack(&body.state.elements).at_rest;
+    if ctx.dt > GLOBAL_SUBSTEPS as Real * settings.safety * at_rest {
+        AUTO_GLOBAL_ITERATIONS
+    } else {
+        0
+    }
+}
+
 fn record_touching(members: &mut [Member<'_, '_>]) {
     let n = members.len();
     for i in 0..n {

@@ -83,7 +83,7 @@ pub struct CantileverScene {
     pub integrator: Integrator,
     /// [`PipelineSettings::global_iterations`](sinew::dim3::PipelineSettings::global_iterations)
     /// of sinew's implicit steps.
-    pub global_iterations: usize,
+    pub global_iterations: Option<usize>,
 }
 
 impl Default for CantileverScene {
@@ -108,7 +108,7 @@ impl Default for CantileverScene {
             seconds: 0.5,
             fixed_substeps: None,
             integrator: Integrator::Explicit,
-            global_iterations: 0,
+            global_iterations: None,
         }
     }
 }

@@ -53,7 +53,7 @@ pub struct FallScene {
     pub integrator: Integrator,
     /// [`PipelineSettings::global_iterations`](sinew::dim3::PipelineSettings::global_iterations)
     /// under the implicit steps (0: the sweeps alone).
-    pub global_iterations: usize,
+    pub global_iterations: Option<usize>,
 }
 
 impl Default for FallScene {
@@ -77,7 +77,7 @@ impl Default for FallScene {
             seconds: 3.0,
             fixed_substeps: None,
             integrator: Integrator::Explicit,
-            global_iterations: 0,
+            global_iterations: None,
         }
     }
 }

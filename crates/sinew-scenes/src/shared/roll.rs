@@ -54,7 +54,7 @@ pub struct RollScene {
     pub integrator: Integrator,
     /// [`PipelineSettings::global_iterations`](sinew::dim3::PipelineSettings::global_iterations)
     /// of the implicit steps.
-    pub global_iterations: usize,
+    pub global_iterations: Option<usize>,
 }
 
 impl Default for RollScene {
@@ -81,7 +81,7 @@ impl Default for RollScene {
             dt: 1.0 / 60.0,
             seconds: 3.0,
             integrator: Integrator::Explicit,
-            global_iterations: 0,
+            global_iterations: None,
         }
     }
 }
