@@ -29,7 +29,7 @@ def main() -> int:
         command, gap, table = m.group(1), m.group(2), m.group(3)
         words = command.split()
         scene = words[words.index("--") + 1] if "--" in words else ""
-        if (only and scene not in only) or (no_fem and "fem" in words):
+        if (only and scene not in only) or (no_fem and any(w.split("/")[-1] == "fem" for w in words)):
             continue
         print(f"== {command}", file=sys.stderr, flush=True)
         run = subprocess.run(command, shell=True, capture_output=True, text=True,
