@@ -33,8 +33,7 @@
 //!
 //! What it leaves alone: a body alone (its damping is the material's), bodies sliding on each
 //! other, touching along an edge or at a corner, or rolling on each other over a small patch,
-//! bodies bound to bones, undamped materials (ζ = 0, or stiffness given raw or per mass), and
-//! every body under the midpoint setting (see `pipeline/mod.rs`).
+//! bodies bound to bones, and undamped materials (ζ = 0, or stiffness given raw or per mass).
 //! What it guarantees: kinetic energy never rises (each member's rigid motion moves toward the
 //! target, its deformation stays), and an unanchored composite's momentum and angular momentum
 //! are unchanged.

@@ -135,8 +135,8 @@ pub struct PipelineSettings {
     /// damp their rigid motions against each other, at a rate set by their materials' damping
     /// ratio, and such a stack resting on the ground its motion against the ground (default
     /// true): a stack's slow sway, which the materials' own damping barely reaches, dies out and
-    /// the stack sleeps (`docs/ARCHITECTURE.md` §6.10). A body alone, bodies sliding on each
-    /// other, and every body under [`Integrator::Midpoint`] are left alone.
+    /// the stack sleeps (`docs/ARCHITECTURE.md` §6.10). A body alone and bodies sliding on
+    /// each other are left alone.
     #[cfg_attr(feature = "serde", serde(default = "default_true"))]
     pub damp_held: bool,
 }
@@ -657,12 +657,8 @@ fn step_group<'a>(
 /// The damping of deformables held against each other ([`held`]) over the last `dt` of the
 /// step, on the last substep's contacts; returns the kinetic energy it took.
 ///
-/// Not under the midpoint setting: damped so, the 3D pile of ten shape-matched cubes
-/// (`scenes pile`, 60 Hz) does not settle in 3 s (1.4 mm inside each other, 3.5 cm/s), where
-/// undamped it sleeps 0.4 mm inside; why is not known yet.
 fn damp_held(members: &mut [Member<'_, '_>], ctx: &StepContext<'_>, dt: Real) -> Real {
-    let midpoint = matches!(ctx.settings.integrator, Integrator::Midpoint { .. });
-    if !ctx.settings.damp_held || midpoint {
+    if !ctx.settings.damp_held {
         return 0.0;
     }
     held::damp(members, dt, ctx.settings.sleep_speed)
