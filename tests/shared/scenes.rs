@@ -40,3 +40,18 @@ fn springs_are_crushed_flat_by_1000_kg() {
         "springs held: {r:?}"
     );
 }
+
+#[test]
+fn a_body_sinew_freezes_for_blowing_up_is_recorded_as_exploded() {
+    // One substep of 1/60 s is far past the springs' stability bound: sinew's own check (a
+    // cell past `max_stretch`) rolls the cube back and freezes it while every node is still
+    // near and slow, so the record must take the flag from sinew's report.
+    let scene = FallScene {
+        subject: ElementModel::Springs.into(),
+        dt: 1.0 / 60.0,
+        fixed_substeps: Some(1),
+        ..FallScene::default()
+    };
+    let r = scene.run().expect("scene builds");
+    assert!(r.exploded && r.failed, "not recorded as a blow-up: {r:?}");
+}

@@ -381,6 +381,9 @@ impl Sim {
                 self.substeps += r.substeps;
                 self.max_substeps = self.max_substeps.max(r.substeps);
                 self.nan |= r.non_finite;
+                // sinew's own blow-up check (a cell past `max_stretch`) rolls the body back and
+                // freezes it before any node is far or fast.
+                self.exploded |= r.exploded || r.non_finite;
             }
             Soft::Rapier(_) => {
                 let iterations = self
