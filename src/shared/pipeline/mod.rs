@@ -118,10 +118,11 @@ pub struct PipelineSettings {
     /// over each whole body before its Gauss–Seidel sweeps (`docs/ARCHITECTURE.md` §4.2), for
     /// bodies whose soft modes the sweeps cannot reach, such as a stiff slender beam at 60 Hz
     /// (it hangs straight under the sweeps alone). `None`, the default: automatic,
-    /// [`AUTO_GLOBAL_ITERATIONS`](super::AUTO_GLOBAL_ITERATIONS) for a body whose explicit step would take more than
-    /// [`GLOBAL_SUBSTEPS`](super::GLOBAL_SUBSTEPS) substeps a step at rest (the beam: 746 at 60 Hz), none otherwise
-    /// (the `fall` cube at res 9: 90; the 10 cm silicone ball of `scenes ball`: 95; the limb:
-    /// 3); `Some(0)`: the sweeps alone. Each step assembles and factors a coarse system of at most 384 unknowns (32 clusters of
+    /// [`AUTO_GLOBAL_ITERATIONS`](super::AUTO_GLOBAL_ITERATIONS) for a body whose explicit
+    /// step would take more than [`GLOBAL_SUBSTEPS`](super::GLOBAL_SUBSTEPS) substeps a step at
+    /// rest (the beam: 746 at 60 Hz), none otherwise (the `fall` cube at res 9: 90; the 10 cm
+    /// silicone ball of `scenes ball`: 95; the limb: 3); `Some(0)`: the sweeps alone. Each
+    /// step assembles and factors a coarse system of at most 384 unknowns (32 clusters of
     /// nodes, each moving affinely) and each iteration costs about a sweep: with 10, the
     /// 1 075-node beam of `scenes bending --res 5` costs 4–7× what its 2 sweeps cost alone;
     /// 5–10 iterations converge the beam.
@@ -656,7 +657,6 @@ fn step_group<'a>(
 
 /// The damping of deformables held against each other ([`held`]) over the last `dt` of the
 /// step, on the last substep's contacts; returns the kinetic energy it took.
-///
 fn damp_held(members: &mut [Member<'_, '_>], ctx: &StepContext<'_>, dt: Real) -> Real {
     if !ctx.settings.damp_held {
         return 0.0;
@@ -688,7 +688,6 @@ fn check_member(
     Some(ready)
 }
 
-/// The deformables each live member touched this step (either's node on the other's facet).
 /// The Newton iterations over `body`'s whole before its sweeps this step
 /// ([`PipelineSettings::global_iterations`]).
 fn global_iterations(body: &Deformable, ctx: &StepContext<'_>) -> usize {
@@ -707,6 +706,7 @@ fn global_iterations(body: &Deformable, ctx: &StepContext<'_>) -> usize {
     }
 }
 
+/// The deformables each live member touched this step (either's node on the other's facet).
 fn record_touching(members: &mut [Member<'_, '_>]) {
     let n = members.len();
     for i in 0..n {
