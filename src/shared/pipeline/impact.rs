@@ -35,7 +35,9 @@
 //! [`PipelineSettings::fixed_substeps`]: super::PipelineSettings::fixed_substeps
 //! [`Integrator::Midpoint`]: super::super::Integrator::Midpoint
 
-use super::super::math::Real;
+use super::super::contact::Candidate;
+use super::super::coupling::BodyMotion;
+use super::super::math::{Real, Vector};
 use super::super::rapier::dynamics::RigidBodySet;
 use super::substep::Member;
 use super::StepContext;
@@ -127,18 +129,11 @@ fn closing_speed(m: &Member<'_, '_>, ctx: &StepContext<'_>, bodies: &RigidBodySe
     let motions = &m.sc.broad.motions;
     let (mut fastest, mut pull) = (Real::NEG_INFINITY, 0.0);
     for cand in &m.candidates {
-        let proj = cand
-            .collider
-            .shape()
-            .project_point(&cand.pose, centre, true);
-        let away = centre - proj.point;
-        let length = away.length();
-        if proj.is_inside || length <= 0.0 || length.is_nan() {
+        let Some((_, normal, closing)) =
+            approach(cand, (centre, velocity), ctx.dt, motions, bodies)
+        else {
             continue;
-        }
-        let normal = away / length;
-        let wall = cand.point_velocity(proj.point, 0.0, ctx.dt, motions, bodies);
-        let closing = -(velocity - wall).dot(normal);
+        };
         if closing > fastest {
             fastest = closing;
             pull = cand.drift.dot(normal).abs();
@@ -165,20 +160,33 @@ fn strikes(
     let (x, v) = (m.body.positions(), m.body.velocities());
     m.candidates.iter().any(|cand| {
         let pull = cand.drift.length();
-        let shape = cand.collider.shape();
         m.body.rest.mesh.boundary_nodes().iter().any(|&i| {
-            let p = x[i as usize];
-            let proj = shape.project_point(&cand.pose, p, true);
-            let away = p - proj.point;
-            let distance = away.length();
-            if proj.is_inside || distance.is_nan() {
+            let (p, u) = (x[i as usize], v[i as usize]);
+            let Some((distance, _, closing)) = approach(cand, (p, u), dt, motions, bodies) else {
                 return false;
-            }
-            let normal = away / distance;
-            let wall = cand.point_velocity(proj.point, 0.0, dt, motions, bodies);
-            let closing = -(v[i as usize] - wall).dot(normal);
+            };
             let reach = 1.1 * (closing.max(0.0) + (g + pull) * dt) * dt;
             closing > threshold && distance > TOUCHING * reach && distance <= reach
         })
     })
+}
+
+/// How a point at `p` moving at `u` approaches `cand`: its distance from the collider, the
+/// outward normal there and its speed toward it (`None` inside the collider or on it).
+fn approach(
+    cand: &Candidate<'_>,
+    (p, u): (Vector, Vector),
+    dt: Real,
+    motions: &[BodyMotion],
+    bodies: &RigidBodySet,
+) -> Option<(Real, Vector, Real)> {
+    let proj = cand.collider.shape().project_point(&cand.pose, p, true);
+    let away = p - proj.point;
+    let distance = away.length();
+    if proj.is_inside || distance <= 0.0 || distance.is_nan() {
+        return None;
+    }
+    let normal = away / distance;
+    let wall = cand.point_velocity(proj.point, 0.0, dt, motions, bodies);
+    Some((distance, normal, -(u - wall).dot(normal)))
 }
