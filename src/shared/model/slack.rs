@@ -25,6 +25,8 @@ pub(crate) struct Slack {
     pub damping: Real,
     /// The calibrated stable substep at rest (s), before the pipeline's safety factor.
     pub at_rest: Real,
+    /// The smallest cell's size (m) it was measured with.
+    pub cell_size: Real,
 }
 
 impl Slack {
@@ -33,6 +35,7 @@ impl Slack {
         stiffness: 1.0,
         damping: 1.0,
         at_rest: Real::INFINITY,
+        cell_size: 0.0,
     };
 
     /// Measures the slack of `state` at the rest positions `rest` (every model's forces vanish
@@ -108,6 +111,7 @@ impl Slack {
             stiffness: ratio(stiffness_bound, stiffness),
             damping: ratio(damping_bound, damping),
             at_rest: Real::INFINITY,
+            cell_size,
         };
         evaluate(rest, &zero, &mut acc);
         slack.at_rest = super::stable_substeps(masses, &acc.stiffness, &acc.damping, slack).0;

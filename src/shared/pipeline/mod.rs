@@ -472,6 +472,7 @@ impl DeformablePipeline {
                     fixed_rows: Vec::new(),
                     held: Vec::new(),
                     shares_bodies: work.shared.iter().any(|p| p.0 == handle || p.1 == handle),
+                    pressed: None,
                 })
                 .collect();
             let touch = |(a, b): &(DeformableHandle, DeformableHandle)| {

@@ -7,7 +7,7 @@ use super::super::contact::soft::{self, NearFacets};
 use super::super::contact::soft_terms;
 use super::super::contact::{self, Contact, FacetMotion, FacetSlack, FreeNode, Held};
 use super::super::coupling::{self, BodyMotion, Substep};
-use super::super::integrator::{AfterContacts, Bound, Integrate, Together};
+use super::super::integrator::{AfterContacts, Integrate, Together};
 use super::super::math::{self, AngVector, Real, Vector, FACET_ARITY};
 use super::super::mesh::Mesh;
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
@@ -37,11 +37,11 @@ pub(super) struct SubstepStats {
     pub self_contacts: usize,
 }
 
-/// The substep size at the current state's bound (its calibrated estimate unless
-/// `calibrated` is false), or `None` when the body is out of substeps (`stats` says so).
+/// The substep size from the `stable` substep (the integrator's bound under the safety
+/// factor) and the crossing `limiter`, or `None` when the body is out of substeps (`stats`
+/// says so).
 fn substep_size(
-    bound: Bound,
-    calibrated: bool,
+    (stable, limiter): (Real, Real),
     ctx: &StepContext<'_>,
     remaining: Real,
     stats: &mut SubstepStats,
@@ -50,8 +50,6 @@ fn substep_size(
     if let Some(k) = settings.fixed_substeps {
         return Some(ctx.dt / k.max(1) as Real);
     }
-    let stable = bound.under(settings.safety, calibrated);
-    let limiter = bound.limiter;
     let bound = stable.min(limiter);
     if limiter < stable {
         stats.limiter_substeps += 1;
@@ -95,6 +93,8 @@ pub(super) struct Member<'m, 'a> {
     pub held: Vec<Held>,
     /// Whether another deformable may push a dynamic body it may push.
     pub shares_bodies: bool,
+    /// The step's [`pressed_substep`], from the state it began with.
+    pub pressed: Option<Real>,
 }
 
 /// Runs the substeps of a group's step, the velocities advanced by `integrator`; with `soft`,
@@ -584,7 +584,17 @@ fn next_substep(
         // (Fixed substeps need no bound: the body's slack is not measured for them.)
         let calibrated = alone && ctx.settings.calibrates(m.body);
         let bound = integrator.bound(m.body, calibrated);
-        match substep_size(bound, calibrated, ctx, remaining, &mut m.stats) {
+        let stable = if calibrated && !m.candidates.is_empty() {
+            let g = ctx.gravity * m.body.gravity_scale;
+            let safety = ctx.settings.safety;
+            let pressed = *m.pressed.get_or_insert_with(|| pressed_substep(m.body, g));
+            bound
+                .under(safety, false)
+                .max(bound.under(safety, true).min(pressed))
+        } else {
+            bound.under(ctx.settings.safety, calibrated)
+        };
+        match substep_size((stable, bound.limiter), ctx, remaining, &mut m.stats) {
             Some(hi) => h = h.min(hi),
             None => out = true,
         }
@@ -598,6 +608,31 @@ fn next_substep(
         return None;
     }
     (h < Real::INFINITY).then_some(h)
+}
+
+/// Share of the smallest cell's size that a boundary node of a body near colliders may be
+/// moved in one substep by its acceleration under the element forces and gravity, for the
+/// calibrated substep (`docs/ARCHITECTURE.md` §4.1).
+const PRESSED_SHARE: Real = 0.01;
+
+/// The longest substep in which no boundary node of `body` (near a collider) is moved more
+/// than [`PRESSED_SHARE`] of the smallest cell by its acceleration `a` under the element
+/// forces and gravity `g`: `a h²` is what a contact holding it must take back every substep.
+fn pressed_substep(body: &Deformable, g: Vector) -> Real {
+    let cell = body.rest.slack(&body.state.elements).cell_size;
+    let (force, inv_masses) = (&body.step.acc.force, &body.rest.inv_masses);
+    let most = body
+        .rest
+        .mesh
+        .boundary_nodes()
+        .iter()
+        .map(|&i| (force[i as usize] * inv_masses[i as usize] + g).length())
+        .fold(0.0, Real::max);
+    if most > 0.0 {
+        (PRESSED_SHARE * cell / most).sqrt()
+    } else {
+        Real::INFINITY
+    }
 }
 
 /// One member's substep up to its positions: the integrator's velocities, the bone drive, the
