@@ -19,17 +19,23 @@
 //!   line from the collider's point nearest to the centre of mass (a tumbling body whose
 //!   corner strikes while its centre hardly closes is not in an impact), and
 //! - a boundary node that does not touch the collider yet, closing on it faster than the
-//!   threshold and near enough to meet it within the step ([`strikes`]).
+//!   threshold and near enough to meet it within the step ([`strikes`]),
+//! - under gravity, both faster than a strike that could throw the body up by a
+//!   [`LIFT_SHARE`] of its size: a slower one's rebound is below what the fall trial measures,
+//!   and the implicit step takes it (on the res-9 `fall` cube, which rocks on its edges for
+//!   seconds, most strikes were such).
 //!
 //! So a body's flight up to the step of the contact is the midpoint step's, and a body
 //! pivoting on an edge that touches (its centre closing, the nodes about the edge hardly
 //! moving) is not in an impact until its face comes down. It stays in it while closing or
-//! while it touches a collider (in any substep of the last step: a body that has just left
-//! still rings, and its nodes strike again), for at most [`SETTLE`] after the last step that
-//! began with a strike. A body bound to a bone, in an island with other deformables or with
-//! self contact on, stepped with [`PipelineSettings::fixed_substeps`], or whose explicit step
-//! would take more than [`MAX_SUBSTEPS`] substeps a step (or `max_substeps`) keeps the
-//! implicit step.
+//! while it touches a collider (in any substep of the last step) until its centre recedes with
+//! every boundary node clear of the colliders (farther than the threshold takes a node in a
+//! step; a ringing node that strikes again starts a new impact), and for at most
+//! the time the bar wave `√(E/ρ)` takes across the body and back, plus a step, after the last
+//! step that began with a strike (its compression given back; [`SETTLE`] at most). A body
+//! bound to a bone, in an island with other deformables or with self contact on, stepped with
+//! [`PipelineSettings::fixed_substeps`], or whose explicit step would take more than
+//! [`MAX_SUBSTEPS`] substeps a step (or `max_substeps`) keeps the implicit step.
 //!
 //! [`PipelineSettings::restitution_threshold`]: super::PipelineSettings::restitution_threshold
 //! [`PipelineSettings::fixed_substeps`]: super::PipelineSettings::fixed_substeps
@@ -37,6 +43,7 @@
 
 use super::super::contact::Candidate;
 use super::super::coupling::BodyMotion;
+use super::super::material::Material;
 use super::super::math::{Real, Vector};
 use super::super::rapier::dynamics::RigidBodySet;
 use super::substep::Member;
@@ -45,6 +52,11 @@ use super::StepContext;
 /// How long a body stays in its impact after the last step that began with a strike, at most
 /// (s): the rebound of a body that lands and stays is over by then.
 pub(crate) const SETTLE: Real = 0.1;
+
+/// A strike is taken explicitly only if it is fast enough to throw the body up by this share
+/// of its size (`√(2 g · share · size)`): slower, its rebound is below what the fall trial
+/// measures (its error bound is a tenth of the size), and the implicit step takes it.
+const LIFT_SHARE: Real = 0.05;
 
 /// A node nearer a collider than this share of what it may close on it in a step touches it
 /// already (contacts leave nodes on the surface).
@@ -79,9 +91,15 @@ pub(super) fn any(
         let state = &m.body.step.midpoint;
         let (left, too_stiff) = (state.impact, state.too_stiff);
         let mut refused = false;
+        let size = extent(m.body.positions());
+        // A strike that could not lift the body a [`LIFT_SHARE`] of its size is left to the
+        // implicit step.
+        let lift = (2.0 * g.length() * LIFT_SHARE * size).sqrt();
+        let strikes_at = threshold.max(lift);
         // A body closing fast flies by the midpoint step up to the step in which a node may
         // strike the collider.
-        let strike = closing > threshold && !too_stiff && strikes(m, ctx, bodies, threshold);
+        let strike = closing > strikes_at && !too_stiff && strikes(m, ctx, bodies, strikes_at);
+        let settle = settle_time(&m.body.rest.params.material, size, ctx.dt);
         let left = if strike && left <= 0.0 {
             // Whether the explicit step is affordable is asked once, as an impact starts.
             let substep = m.body.substep(settings.safety, false);
@@ -89,11 +107,14 @@ pub(super) fn any(
             if refused {
                 0.0
             } else {
-                SETTLE
+                settle
             }
         } else if strike {
-            SETTLE
-        } else if left > 0.0 && (closing > threshold || touching) {
+            settle
+        } else if left > 0.0
+            && (closing > threshold
+                || (touching && !(closing < 0.0 && separated(m, ctx, bodies, threshold))))
+        {
             (left - ctx.dt).max(0.0)
         } else {
             0.0
@@ -167,6 +188,48 @@ fn strikes(
             };
             let reach = 1.1 * (closing.max(0.0) + (g + pull) * dt) * dt;
             closing > threshold && distance > TOUCHING * reach && distance <= reach
+        })
+    })
+}
+
+/// The largest side of the box around `x`.
+fn extent(x: &[Vector]) -> Real {
+    let Some(first) = x.first() else {
+        return 0.0;
+    };
+    let (lo, hi) = x
+        .iter()
+        .fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    (hi - lo).max_element()
+}
+
+/// How long an impact lasts after a strike: a step more than the bar wave `√(E/ρ)` of
+/// `material` takes across a body of `size` and back, the time its compression takes to be
+/// given back; at most [`SETTLE`].
+fn settle_time(material: &Material, size: Real, dt: Real) -> Real {
+    let wave = (material.young_modulus / material.density).sqrt();
+    if wave > 0.0 && wave.is_finite() {
+        (2.0 * size / wave + dt).min(SETTLE)
+    } else {
+        SETTLE
+    }
+}
+
+/// Whether every boundary node of `m` is farther from each candidate collider than a node at
+/// `threshold` goes in a step: the body has left them.
+fn separated(
+    m: &Member<'_, '_>,
+    ctx: &StepContext<'_>,
+    bodies: &RigidBodySet,
+    threshold: Real,
+) -> bool {
+    let dt = ctx.dt;
+    let motions = &m.sc.broad.motions;
+    let (x, v) = (m.body.positions(), m.body.velocities());
+    m.candidates.iter().all(|cand| {
+        m.body.rest.mesh.boundary_nodes().iter().all(|&i| {
+            let (p, u) = (x[i as usize], v[i as usize]);
+            approach(cand, (p, u), dt, motions, bodies).is_some_and(|(d, _, _)| d > threshold * dt)
         })
     })
 }
