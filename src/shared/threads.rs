@@ -23,6 +23,24 @@ pub(crate) fn chunked_sum(count: usize, part: impl Fn(Range<usize>) -> Real + Sy
     (0..chunks).map(chunk).sum()
 }
 
+/// `part(chunk)` over `0..count` cut into fixed chunks, the chunks' results combined in order
+/// by `combine` (on rayon's threads when there are several chunks and threads).
+pub(crate) fn chunked_fold<T: Send>(
+    count: usize,
+    part: impl Fn(Range<usize>) -> T + Sync,
+    combine: impl Fn(T, T) -> T,
+) -> Option<T> {
+    let chunk = |c: usize| part(c * CHUNK..((c + 1) * CHUNK).min(count));
+    let chunks = count.div_ceil(CHUNK);
+    #[cfg(feature = "parallel")]
+    if chunks > 1 && rayon::current_num_threads() > 1 {
+        use rayon::prelude::*;
+        let parts: Vec<T> = (0..chunks).into_par_iter().map(chunk).collect();
+        return parts.into_iter().reduce(combine);
+    }
+    (0..chunks).map(chunk).reduce(combine)
+}
+
 /// Whether `test(i)` holds for every `i` in `0..count` (on rayon's threads when there are
 /// several chunks and threads).
 pub(crate) fn all(count: usize, test: impl Fn(usize) -> bool + Sync) -> bool {

@@ -3,6 +3,7 @@
 use super::super::body::Deformable;
 use super::super::math::{Real, Vector, DIM};
 use super::super::rapier::dynamics::RigidBodySet;
+use super::super::threads;
 use super::{RigidHold, StepContext, Touch};
 
 /// Checks the state after the substeps: non-finite, so far out that it can only be a blow-up
@@ -51,20 +52,30 @@ impl Quality {
     /// One pass over the cells at the body's positions (`most`: the stretch limit, infinite
     /// for none).
     pub fn of(body: &Deformable, most: Real) -> Quality {
-        let mut q = Quality {
+        let none = Quality {
             inverted: 0,
             min_ratio: Real::INFINITY,
             stretched: false,
         };
         let limited = most.is_finite();
-        for c in 0..body.rest.mesh.num_cells() {
-            let ratio = body.rest.mesh.cell_quality(c, &body.state.positions);
-            if ratio <= 0.0 {
-                q.inverted += 1;
+        let (mesh, x) = (&body.rest.mesh, &body.state.positions);
+        let part = |cells: std::ops::Range<usize>| {
+            let mut q = none;
+            for c in cells {
+                let ratio = mesh.cell_quality(c, x);
+                if ratio <= 0.0 {
+                    q.inverted += 1;
+                }
+                q.min_ratio = q.min_ratio.min(ratio);
+                q.stretched |= limited && ratio > most;
             }
-            q.min_ratio = q.min_ratio.min(ratio);
-            q.stretched |= limited && ratio > most;
-        }
-        q
+            q
+        };
+        let combine = |a: Quality, b: Quality| Quality {
+            inverted: a.inverted + b.inverted,
+            min_ratio: a.min_ratio.min(b.min_ratio),
+            stretched: a.stretched || b.stretched,
+        };
+        threads::chunked_fold(mesh.num_cells(), part, combine).unwrap_or(none)
     }
 }
