@@ -177,17 +177,29 @@ fn strikes(
 ) -> bool {
     let g = (ctx.gravity * m.body.gravity_scale).length();
     let dt = ctx.dt;
+    node_approaches(m, dt, bodies).any(|(cand, approach)| {
+        let Some((distance, _, closing)) = approach else {
+            return false;
+        };
+        let reach = 1.1 * (closing.max(0.0) + (g + cand.drift.length()) * dt) * dt;
+        closing > threshold && distance > TOUCHING * reach && distance <= reach
+    })
+}
+
+/// Each candidate collider of `m` with each boundary node's [`approach`] to it (candidates
+/// outermost).
+fn node_approaches<'m>(
+    m: &'m Member<'_, '_>,
+    dt: Real,
+    bodies: &'m RigidBodySet,
+) -> impl Iterator<Item = (&'m Candidate<'m>, Option<(Real, Vector, Real)>)> + 'm {
     let motions = &m.sc.broad.motions;
     let (x, v) = (m.body.positions(), m.body.velocities());
-    m.candidates.iter().any(|cand| {
-        let pull = cand.drift.length();
-        m.body.rest.mesh.boundary_nodes().iter().any(|&i| {
+    let nodes = m.body.rest.mesh.boundary_nodes();
+    m.candidates.iter().flat_map(move |cand| {
+        nodes.iter().map(move |&i| {
             let (p, u) = (x[i as usize], v[i as usize]);
-            let Some((distance, _, closing)) = approach(cand, (p, u), dt, motions, bodies) else {
-                return false;
-            };
-            let reach = 1.1 * (closing.max(0.0) + (g + pull) * dt) * dt;
-            closing > threshold && distance > TOUCHING * reach && distance <= reach
+            (cand, approach(cand, (p, u), dt, motions, bodies))
         })
     })
 }
@@ -224,14 +236,8 @@ fn separated(
     threshold: Real,
 ) -> bool {
     let dt = ctx.dt;
-    let motions = &m.sc.broad.motions;
-    let (x, v) = (m.body.positions(), m.body.velocities());
-    m.candidates.iter().all(|cand| {
-        m.body.rest.mesh.boundary_nodes().iter().all(|&i| {
-            let (p, u) = (x[i as usize], v[i as usize]);
-            approach(cand, (p, u), dt, motions, bodies).is_some_and(|(d, _, _)| d > threshold * dt)
-        })
-    })
+    node_approaches(m, dt, bodies)
+        .all(|(_, approach)| approach.is_some_and(|(d, _, _)| d > threshold * dt))
 }
 
 /// How a point at `p` moving at `u` approaches `cand`: its distance from the collider, the
