@@ -41,9 +41,19 @@
 use super::super::material::Resolved;
 use super::super::math::{self, Real, Vector, FACET_ARITY, SIMPLEX_ARITY};
 use super::super::mesh::Mesh;
+use super::lanes::{self, Lane, LaneVector, LANES};
 use super::springs::{Law, Springs};
 use super::volume::Volume;
 use super::{Accumulator, NodeBounds};
+
+/// Per lane: a cell's vertex indices, the sign of its rest `D`, and per vertex the rest
+/// height and stiffness of its repulsion.
+type CellLanes<'a> = (
+    [&'a [u32; SIMPLEX_ARITY]; LANES],
+    [&'a Real; LANES],
+    [&'a [Real; SIMPLEX_ARITY]; LANES],
+    [&'a [Real; SIMPLEX_ARITY]; LANES],
+);
 
 /// Calibration constant `s` of the ER material mapping: 47/33 in 3D, 5/6 in 2D (see the
 /// module's docs).
@@ -207,18 +217,13 @@ impl EdgeRepulsion {
         self.edges.accumulate(x, v, acc);
         let n = x.len();
         let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
-        let mut limit = Real::INFINITY;
-        for (cell, (((ids, sign), h0), k)) in self.cell_data(0).enumerate() {
-            let (f, k_row, cell_limit) =
-                cell_terms(ids, sign, h0, k, x, v, volume.map(|v| (v, cell)));
+        self.each_cell(0..self.sign.len(), (x, v, volume), |_, ids, f, k_row| {
             for a in 0..SIMPLEX_ARITY {
                 let i = ids[a] as usize;
                 force[i] += f[a];
                 stiffness[i] += k_row[a];
             }
-            limit = limit.min(cell_limit);
-        }
-        limit
+        })
     }
 
     /// Adds the repulsions (and volumetric terms) of cells `ids` on the nodes `force` and
@@ -233,28 +238,16 @@ impl EdgeRepulsion {
         force: &mut [Vector],
         stiffness: &mut [Real],
     ) -> Real {
-        let mut limit = Real::INFINITY;
         let nodes = force.len();
-        let (cells, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
-        let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
-        let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
-        let (cells, signs) = (&cells[ids.clone()], &self.sign[ids.clone()]);
-        let (h0, k) = (&h0[ids.clone()], &k[ids.clone()]);
-        let terms = cells.iter().zip(signs).zip(h0).zip(k);
-        for (c, (((ids_c, sign), h0), k)) in terms.enumerate() {
-            let cell = ids.start + c;
-            let (f, k_row, cell_limit) =
-                cell_terms(ids_c, sign, h0, k, x, v, volume.map(|v| (v, cell)));
+        self.each_cell(ids, (x, v, volume), |_, ids, f, k_row| {
             for a in 0..SIMPLEX_ARITY {
-                let i = (ids_c[a] as usize).wrapping_sub(first);
+                let i = (ids[a] as usize).wrapping_sub(first);
                 if i < nodes {
                     force[i] += f[a];
                     stiffness[i] += k_row[a];
                 }
             }
-            limit = limit.min(cell_limit);
-        }
-        limit
+        })
     }
 
     /// Writes each cell's repulsion force and stiffness bound on each of its vertices into
@@ -279,115 +272,168 @@ impl EdgeRepulsion {
             .zip(stiffness.par_chunks_mut(CHUNK))
             .enumerate()
             .map(|(t, (force, stiffness))| {
-                let mut limit = Real::INFINITY;
-                let out = force.iter_mut().zip(stiffness);
-                let cells = self.cell_data(t * CHUNK).enumerate();
-                for ((f, k_row), (c, (((ids, sign), h0), k))) in out.zip(cells) {
-                    let cell_limit;
-                    let cell = t * CHUNK + c;
-                    (*f, *k_row, cell_limit) =
-                        cell_terms(ids, sign, h0, k, x, v, volume.map(|v| (v, cell)));
-                    limit = limit.min(cell_limit);
-                }
-                limit
+                let cells = t * CHUNK..t * CHUNK + force.len();
+                self.each_cell(cells, (x, v, volume), |c, _, f, k_row| {
+                    force[c - t * CHUNK] = *f;
+                    stiffness[c - t * CHUNK] = *k_row;
+                })
             })
             .reduce(|| Real::INFINITY, Real::min)
     }
 
-    /// From cell `first` on, per cell: its vertex indices, the sign of its rest `D` and, per
-    /// vertex, the rest height and stiffness of its repulsion.
-    #[allow(clippy::type_complexity)]
-    fn cell_data(
+    /// Calls `out(cell, its vertices, the force on each, its stiffness row)` for each cell of
+    /// `cells` in order (the repulsions and the `volume` term at `x`, `v`), evaluated
+    /// [`LANES`] at a time; returns the cells' crossing limiter.
+    #[inline(always)]
+    fn each_cell(
         &self,
-        first: usize,
-    ) -> impl Iterator<
-        Item = (
-            ((&[u32; SIMPLEX_ARITY], &Real), &[Real; SIMPLEX_ARITY]),
+        cells: std::ops::Range<usize>,
+        (x, v, volume): (&[Vector], &[Vector], Option<&Volume>),
+        mut out: impl FnMut(
+            usize,
+            &[u32; SIMPLEX_ARITY],
+            &[Vector; SIMPLEX_ARITY],
             &[Real; SIMPLEX_ARITY],
         ),
-    > {
-        let (cells, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
+    ) -> Real {
+        let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
         let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
         let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
-        cells[first..]
-            .iter()
-            .zip(&self.sign[first..])
-            .zip(&h0[first..])
-            .zip(&k[first..])
+        let mut limit = Real::INFINITY;
+        for first in cells.clone().step_by(LANES) {
+            // The last batch repeats its last cell in the lanes past the end.
+            let batch: [usize; LANES] = std::array::from_fn(|l| (first + l).min(cells.end - 1));
+            let data = (
+                batch.map(|c| &ids[c]),
+                batch.map(|c| &self.sign[c]),
+                batch.map(|c| &h0[c]),
+                batch.map(|c| &k[c]),
+            );
+            let (f, rows, batch_limit) = cell_terms(batch, data, x, v, volume);
+            for l in 0..LANES.min(cells.end - first) {
+                out(first + l, &ids[first + l], &f[l], &rows[l]);
+            }
+            limit = limit.min(batch_limit);
+        }
+        limit
     }
 
-    /// The repulsions' elastic energy in cells `cells`.
+    /// The repulsions' elastic energy in cells `cells`, [`LANES`] cells at a time.
     pub fn cell_energy(&self, x: &[Vector], cells: std::ops::Range<usize>) -> Real {
-        let mut e = 0.0;
-        for cell in cells {
-            let ids = &self.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
+        let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
+        let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
+        let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
+        let lane_index = Lane::new(std::array::from_fn(|l| l as Real));
+        let tiny = Lane::splat(Real::MIN_POSITIVE);
+        let mut e = Lane::ZERO;
+        for first in cells.clone().step_by(LANES) {
+            // The last batch repeats its last cell in the lanes past the end, and counts it
+            // once.
+            let batch: [usize; LANES] = std::array::from_fn(|l| (first + l).min(cells.end - 1));
+            let counted = lane_index.simd_lt(Lane::splat((cells.end - first) as Real));
+            let xs: [LaneVector; SIMPLEX_ARITY] =
+                std::array::from_fn(|a| LaneVector::gather(|l| x[ids[batch[l]][a] as usize]));
+            let sign = Lane::new(batch.map(|c| self.sign[c]));
+            // The heights as the forces measure them (`cell_terms`).
+            let (_, g) = lanes::simplex_gradients(&xs);
             for a in 0..SIMPLEX_ARITY {
-                let s = cell * SIMPLEX_ARITY + a;
-                let f = OPPOSITE[a];
-                let facet: [Vector; FACET_ARITY] = std::array::from_fn(|m| x[ids[f[m]] as usize]);
-                let normal = math::facet_normal(&facet);
-                let len = normal.length();
-                if len <= Real::MIN_POSITIVE {
-                    continue;
-                }
-                let h = (normal * (self.side[s] / len)).dot(x[ids[a] as usize] - facet[0]);
-                let h0 = self.h0[s];
-                let hc = h.max(MIN_HEIGHT_RATIO * h0);
-                e += self.k[s] * (0.5 * (hc * hc - h0 * h0) - h0 * h0 * (hc / h0).ln());
+                let h0 = Lane::new(batch.map(|c| h0[c][a]));
+                let k = Lane::new(batch.map(|c| k[c][a]));
+                let g2 = g[a].length_squared();
+                let live = g2.simd_gt(tiny) & counted;
+                let len = live.select(g2, Lane::ONE).sqrt();
+                let h = g[a].dot(xs[a] - xs[OPPOSITE[a][0]]) * sign / len;
+                let hc = h.max(Lane::splat(MIN_HEIGHT_RATIO) * h0);
+                e += live.select(k * h0 * h0 * stored((hc - h0) / h0), Lane::ZERO);
             }
         }
-        e
+        e.reduce_add()
     }
 }
 
-/// The repulsions of one cell (`sign`: the sign of its rest `D`) and its `volume` term (the
-/// term and the cell's index), summed per vertex: the force on each vertex, its Gershgorin
-/// stiffness row, and the crossing limiter of the cell (infinite when no vertex approaches its
-/// facet).
+/// The energy of a repulsion over `k h0²` at the relative height `1 + t`:
+/// `(u² − 1)/2 − ln u`, `u = 1 + t` (the integral of [`magnitude`]), which is
+/// `t² − t³/3 + t⁴/4 − …`. Near rest its two terms cancel to `t²` (at `t = 10⁻⁴`, single
+/// precision kept one digit), so there it is the series, exact in single precision up to
+/// `|t| = ⅛` with six terms after `t²`.
 #[inline(always)]
+fn stored(t: Lane) -> Lane {
+    let mut series = Lane::splat(1.0 / 8.0);
+    for n in (3..8).rev() {
+        let c = if n % 2 == 0 { 1.0 } else { -1.0 } / n as Real;
+        series = Lane::splat(c) + t * series;
+    }
+    let near = t * t * (Lane::ONE + t * series);
+    let far = t.abs().simd_ge(Lane::splat(0.125));
+    if far.any() {
+        let u = Lane::ONE + t;
+        far.select(Lane::splat(0.5) * (u * u - Lane::ONE) - u.ln(), near)
+    } else {
+        near
+    }
+}
+
+/// The repulsions of [`LANES`] cells (`cells`, each vertex's index `ids`, `sign` of the rest
+/// `D`, and per vertex the rest height `h0` and stiffness `k`) and their `volume` terms,
+/// summed per vertex: each cell's force on each vertex and its Gershgorin stiffness row, and
+/// the crossing limiter of the cells (infinite when no vertex approaches its facet).
+#[inline(always)]
+#[allow(clippy::type_complexity)]
 fn cell_terms(
-    ids: &[u32; SIMPLEX_ARITY],
-    sign: &Real,
-    h0: &[Real; SIMPLEX_ARITY],
-    k: &[Real; SIMPLEX_ARITY],
+    cells: [usize; LANES],
+    (ids, sign, rest_heights, stiffnesses): CellLanes<'_>,
     x: &[Vector],
     v: &[Vector],
-    volume: Option<(&Volume, usize)>,
-) -> ([Vector; SIMPLEX_ARITY], [Real; SIMPLEX_ARITY], Real) {
-    let xs: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
-    let vs: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| v[ids[a] as usize]);
-    // One evaluation of the cell's volume gradients serves every repulsion and the volumetric
+    volume: Option<&Volume>,
+) -> (
+    [[Vector; SIMPLEX_ARITY]; LANES],
+    [[Real; SIMPLEX_ARITY]; LANES],
+    Real,
+) {
+    let xs: [LaneVector; SIMPLEX_ARITY] =
+        std::array::from_fn(|a| LaneVector::gather(|l| x[ids[l][a] as usize]));
+    let vs: [LaneVector; SIMPLEX_ARITY] =
+        std::array::from_fn(|a| LaneVector::gather(|l| v[ids[l][a] as usize]));
+    let per_vertex =
+        |t: &[&[Real; SIMPLEX_ARITY]; LANES], a: usize| Lane::new(std::array::from_fn(|l| t[l][a]));
+    let sign = Lane::new(sign.map(|s| *s));
+    // One evaluation of the cells' volume gradients serves every repulsion and the volumetric
     // term: `g_a` is normal to the facet opposite `a`, `n = sign · g_a / |g_a|` points to `a`'s
     // rest side, and the foot's weight at facet vertex `b` is `−g_a·g_b / |g_a|²`. The height
     // is measured along `n` from a facet vertex: `sign · D / |g_a|` is the same height, but
     // `D`, one product for the whole cell, rounds worse where the strain is small (a 2D bar
     // ringing at 0.3 % strain came out 11 % low).
-    let (d, g) = math::simplex_gradients(&xs);
-    let sign = *sign;
-    let mut force = [Vector::ZERO; SIMPLEX_ARITY];
-    let mut stiffness = [0.0; SIMPLEX_ARITY];
-    let mut limit = Real::INFINITY;
+    let (d, g) = lanes::simplex_gradients(&xs);
+    let mut force = [LaneVector::ZERO; SIMPLEX_ARITY];
+    let mut stiffness = [Lane::ZERO; SIMPLEX_ARITY];
+    let mut length = [Lane::ZERO; SIMPLEX_ARITY];
+    let mut limit = Lane::splat(Real::INFINITY);
+    let (one, tiny) = (Lane::ONE, Lane::splat(Real::MIN_POSITIVE));
     for a in 0..SIMPLEX_ARITY {
         let f = OPPOSITE[a];
+        let (h0, k) = (per_vertex(&rest_heights, a), per_vertex(&stiffnesses, a));
         let g2 = g[a].length_squared();
-        let (push, normal, w, h, k_eff) = if g2 <= Real::MIN_POSITIVE {
-            // The facet collapsed to a point or a line: no direction this substep.
-            let w = [1.0 / FACET_ARITY as Real; FACET_ARITY];
-            (Vector::ZERO, Vector::ZERO, w, 0.0, 2.0 * k[a])
-        } else {
-            let len = g2.sqrt();
-            let normal = g[a] * (sign / len);
-            let h = normal.dot(xs[a] - xs[f[0]]);
-            let hc = h.max(MIN_HEIGHT_RATIO * h0[a]);
-            let w: [Real; FACET_ARITY] = std::array::from_fn(|m| -g[a].dot(g[f[m]]) / g2);
-            let k_eff = k[a] * (1.0 + h0[a] * h0[a] / (hc * hc));
-            (normal * magnitude(h, h0[a], k[a]), normal, w, h, k_eff)
-        };
+        // A facet collapsed to a point or a line has no direction this substep: no push, the
+        // foot's weights even, the stiffness at rest.
+        let live = g2.simd_gt(tiny);
+        let g2 = live.select(g2, one);
+        length[a] = g2.sqrt();
+        // Division for division as [`repulsion`] and [`magnitude`] write the law, so that both
+        // round alike (a fold in self contact is chaotic enough to tell reciprocals apart).
+        let normal = g[a] * (sign / length[a]);
+        let h = live.select(normal.dot(xs[a] - xs[f[0]]), Lane::ZERO);
+        let hc = h.max(Lane::splat(MIN_HEIGHT_RATIO) * h0);
+        let k_eff = live.select(k * (one + h0 * h0 / (hc * hc)), k + k);
+        let push = live.select(k * (h0 * h0 / hc - h), Lane::ZERO);
+        let push = normal.or_zero(live) * push;
+        let even = Lane::splat(1.0 / FACET_ARITY as Real);
+        let w: [Lane; FACET_ARITY] =
+            std::array::from_fn(|m| live.select(-g[a].dot(g[f[m]]) / g2, even));
         force[a] += push;
-        let mut foot_velocity = Vector::ZERO;
-        let mut wsum = 1.0;
+        let mut foot_velocity = LaneVector::ZERO;
+        let mut wsum = one;
         for m in 0..FACET_ARITY {
-            force[f[m]] -= push * w[m];
+            force[f[m]] += -(push * w[m]);
             foot_velocity += vs[f[m]] * w[m];
             wsum += w[m].abs();
         }
@@ -397,21 +443,26 @@ fn cell_terms(
             stiffness[f[m]] += k_eff * w[m].abs() * wsum;
         }
         // Crossing limiter.
-        if h > 0.0 {
-            let rate = normal.dot(vs[a] - foot_velocity);
-            if rate < 0.0 {
-                limit = limit.min(CROSSING_FRACTION * h / -rate);
-            }
-        }
+        let rate = normal.dot(vs[a] - foot_velocity);
+        let closing = h.simd_gt(Lane::ZERO) & rate.simd_lt(Lane::ZERO) & live;
+        let time = Lane::splat(CROSSING_FRACTION) * h / -rate;
+        limit = limit.min(closing.select(time, Lane::splat(Real::INFINITY)));
     }
-    if let Some((volume, cell)) = volume {
-        let (f, k) = volume.cell_terms_at(cell, d, &g);
+    if let Some(volume) = volume {
+        let (f, k) = volume.cell_lanes(cells, d, &g, &length);
         for a in 0..SIMPLEX_ARITY {
             force[a] += f[a];
             stiffness[a] += k[a];
         }
     }
-    (force, stiffness, limit)
+    let force = force.map(LaneVector::lanes);
+    let stiffness = stiffness.map(Lane::to_array);
+    let limit = limit.to_array().into_iter().fold(Real::INFINITY, Real::min);
+    (
+        std::array::from_fn(|l| std::array::from_fn(|a| force[a][l])),
+        std::array::from_fn(|l| std::array::from_fn(|a| stiffness[a][l])),
+        limit,
+    )
 }
 
 #[cfg(test)]
@@ -420,6 +471,64 @@ mod tests {
     use super::super::super::mesh::CellKind;
     use super::super::{Accumulator, ElementModel, Elements};
     use super::*;
+
+    #[test]
+    fn the_repulsions_energy_is_the_potential_of_their_forces() {
+        // A squashed, sheared lattice: moving one node changes the repulsions' energy by the
+        // work of their force on it.
+        let half = Vector::splat(0.05);
+        let body = DeformableBuilder::cuboid(half, [3; math::DIM])
+            .cells(CellKind::Simplex)
+            .model(ElementModel::EdgeRepulsion)
+            .build()
+            .unwrap();
+        let Elements::EdgeRepulsion(er) = &body.state.elements.elements else {
+            unreachable!()
+        };
+        let x = super::super::squashed(&body.state.positions, 0.7, 0.4);
+        let n = x.len();
+        let cells = 0..er.sign.len();
+        let mut acc = Accumulator::new(n);
+        er.accumulate(&x, &vec![Vector::ZERO; n], &mut acc, None);
+        let mut edges = Accumulator::new(n);
+        er.edges.accumulate(&x, &vec![Vector::ZERO; n], &mut edges);
+        let eps = 1e-2 * half.x;
+        let scale = (0..n)
+            .map(|i| (acc.force[i] - edges.force[i]).length())
+            .fold(0.0, Real::max);
+        for i in [0, n / 2, n - 1] {
+            for d in 0..math::DIM {
+                let (mut plus, mut minus) = (x.clone(), x.clone());
+                plus[i][d] += eps;
+                minus[i][d] -= eps;
+                let work = (er.cell_energy(&minus, cells.clone())
+                    - er.cell_energy(&plus, cells.clone()))
+                    / (2.0 * eps);
+                let force = acc.force[i][d] - edges.force[i][d];
+                assert!(
+                    (work - force).abs() < 2e-2 * scale,
+                    "node {i} axis {d}: {work} against {force}"
+                );
+            }
+        }
+        // Near rest, where the law's two terms cancel, the energy is the barrier's `k (δh)²`.
+        let y = super::super::squashed(&body.state.positions, 1.0 - 1e-4, 0.0);
+        let mut exact = 0.0;
+        for (cell, ids) in er.cells.chunks_exact(SIMPLEX_ARITY).enumerate() {
+            for a in 0..SIMPLEX_ARITY {
+                let s = cell * SIMPLEX_ARITY + a;
+                let facet: [Vector; FACET_ARITY] =
+                    std::array::from_fn(|m| y[ids[OPPOSITE[a][m]] as usize]);
+                let r = repulsion(y[ids[a] as usize], &facet, er.side[s], er.h0[s], er.k[s]);
+                let t = (r.height / er.h0[s]) as f64 - 1.0;
+                exact += er.k[s] as f64 * (er.h0[s] as f64).powi(2) * (t + 0.5 * t * t - t.ln_1p());
+            }
+        }
+        let e = er.cell_energy(&y, cells.clone()) as f64;
+        assert!((e / exact - 1.0).abs() < 1e-2, "{e} against {exact}");
+        assert!(er.cell_energy(&x, cells.clone()) > 0.0);
+        assert!(er.cell_energy(&body.state.positions, cells).abs() < 1e-9);
+    }
 
     #[test]
     fn the_cell_pass_gives_each_repulsion_its_force_and_bound() {

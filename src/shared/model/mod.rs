@@ -53,6 +53,7 @@ pub mod centroid_springs;
 pub mod edge_repulsion;
 pub mod hessian;
 mod implicit;
+mod lanes;
 pub mod nonlinear_springs;
 #[cfg(feature = "parallel")]
 mod parallel;

@@ -10,6 +10,7 @@
 //! block out then (its gradient is exact either way).
 
 use super::super::math::{self, Matrix, Real, Vector, DIM, DIM_FACTORIAL, SIMPLEX_ARITY};
+use super::lanes::{Lane, LaneVector, LANES};
 use super::Accumulator;
 
 /// The scale `σ` of a model's own terms and the volumetric modulus `κ` (over `E`) that give a
@@ -121,6 +122,29 @@ impl Volume {
         let (strain, k) = (d / d0 - 1.0, self.k[cell] / d0);
         let length: [Real; SIMPLEX_ARITY] = std::array::from_fn(|a| g[a].length());
         let row = (k / d0).abs() * length.iter().sum::<Real>();
+        (
+            std::array::from_fn(|a| -(g[a] * (k * strain))),
+            std::array::from_fn(|a| row * length[a]),
+        )
+    }
+
+    /// [`Volume::cell_terms_at`] of [`LANES`] cells `cells`, from their `D`, its gradients and
+    /// their lengths.
+    #[inline(always)]
+    pub fn cell_lanes(
+        &self,
+        cells: [usize; LANES],
+        d: Lane,
+        g: &[LaneVector; SIMPLEX_ARITY],
+        length: &[Lane; SIMPLEX_ARITY],
+    ) -> ([LaneVector; SIMPLEX_ARITY], [Lane; SIMPLEX_ARITY]) {
+        let d0 = Lane::new(cells.map(|c| self.d0[c]));
+        let (strain, k) = (d / d0 - Lane::ONE, Lane::new(cells.map(|c| self.k[c])) / d0);
+        let mut sum = length[0];
+        for l in &length[1..] {
+            sum += *l;
+        }
+        let row = (k / d0).abs() * sum;
         (
             std::array::from_fn(|a| -(g[a] * (k * strain))),
             std::array::from_fn(|a| row * length[a]),
