@@ -61,10 +61,11 @@ mod global;
 
 use std::ops::Range;
 
-use super::super::math::{self, Matrix, Real, Rotation, Vector, SIMPLEX_ARITY};
+use super::super::math::{self, Matrix, Real, Rotation, Vector, DIM, SIMPLEX_ARITY};
 use super::super::threads;
 use super::edge_repulsion::EdgeRepulsion;
 use super::hessian;
+use super::lanes::{self, Lane, LaneVector, LANES};
 use super::shape_matching::ShapeMatching;
 use super::springs::{Law, Springs};
 use super::volume::Volume;
@@ -657,11 +658,11 @@ impl Solve<'_> {
             return None;
         }
         let inertia = (self.masses[i] + hold.carried()) / (self.h * self.h);
-        let (mut f, mut block) = self.vertex.newton(i, x, inertia, self.y[i]);
+        let (mut f, mut block, reach) = self.vertex.newton(i, x, inertia, self.y[i]);
         extra(&mut f, &mut block);
         let inverse = invert(block)?;
         let step = hold.constrained_step(x.at(i), inverse, f);
-        Some(self.vertex.line_search(i, x, step, hold))
+        Some(self.vertex.line_search(i, x, step, hold, reach))
     }
 
     /// Refits the held rotations of shape-based cells at `x`.
@@ -996,35 +997,28 @@ struct Vertex<'a> {
 }
 
 impl Vertex<'_> {
-    /// `f_i = −∂G/∂x_i` and the block `H_i` at `x`.
+    /// `f_i = −∂G/∂x_i` and the block `H_i` at `x`, and how far node `i` may move from `x`,
+    /// at least, keeping every cell of its upright ([`cell_upright`]; zero, unknown, without
+    /// edge repulsion).
     fn newton<P: Positions + ?Sized>(
         &self,
         i: usize,
         x: &P,
         inertia: Real,
         y: Vector,
-    ) -> (Vector, Matrix) {
+    ) -> (Vector, Matrix, Real) {
         let mut f = (y - x.at(i)) * inertia;
         let mut block = Matrix::IDENTITY * inertia;
         if let Some(s) = self.springs {
             self.add_springs(s, i, x, &mut f, &mut block);
         }
+        let mut reach = 0.0;
         if let Some(er) = self.er {
-            // One evaluation of each cell's volume gradients serves its repulsions and its
-            // volumetric term.
-            for &(cell, a) in self.incidence.cells_of(i) {
-                let (cell, a) = (cell as usize, a as usize);
-                let (d, g) = cell_geometry(er, cell, &cell_positions(er, cell, x));
-                let (df, db) = repulsion_terms(er, cell, a, (d, &g));
-                f += df;
-                block += db;
-                if let Some(volume) = self.volume {
-                    let raw = d * er.sign[cell];
-                    let (df, db) = volume.vertex_terms_at(cell, a, raw, &g);
-                    f += df;
-                    block += db;
-                }
-            }
+            let df;
+            let db;
+            (df, db, reach) = cell_lanes_at(er, self.volume, self.incidence.cells_of(i), x);
+            f += df;
+            block += db;
         } else if let Some(volume) = self.volume {
             for &(cell, a) in self.incidence.cells_of(i) {
                 let cell = cell as usize;
@@ -1051,7 +1045,7 @@ impl Vertex<'_> {
                 block += hessian::shape_block(n, k + c);
             }
         }
-        (f, block)
+        (f, block, reach)
     }
 
     /// The springs at node `i` (with their dashpots, implicit).
@@ -1097,8 +1091,13 @@ impl Vertex<'_> {
         x: &P,
         step: Vector,
         hold: Hold,
+        reach: Real,
     ) -> Vector {
         let start = x.at(i);
+        let whole = hold.project(start + step);
+        if (whole - start).length() < reach {
+            return whole;
+        }
         let simplex_shapes = self
             .shape
             .as_ref()
@@ -1138,7 +1137,18 @@ impl Vertex<'_> {
         let mut alpha = 1.0;
         for _ in 0..=10 {
             let p = hold.project(start + step * alpha);
-            if cells.iter().all(|&(cell, _)| upright(cell as usize, p)) {
+            let kept = match self.er {
+                // Most cells pass the cheaper test, several at a time.
+                Some(er) => cells.chunks(LANES).all(|batch| {
+                    let passed = uprights(er, batch, i, p, x);
+                    batch
+                        .iter()
+                        .enumerate()
+                        .all(|(l, &(cell, _))| passed & (1 << l) != 0 || upright(cell as usize, p))
+                }),
+                None => cells.iter().all(|&(cell, _)| upright(cell as usize, p)),
+            };
+            if kept {
                 return p;
             }
             alpha *= 0.5;
@@ -1173,8 +1183,9 @@ fn cell_geometry(
 /// The repulsions of `cell` at its vertex `a`: `−∂E/∂x_a` and the Gauss–Newton block, the
 /// same terms as [`super::edge_repulsion::repulsion`] and [`hessian::repulsion_blocks`] from
 /// one evaluation of the cell. Each height is `h_b = D / |g_b|` along `n_b = ± g_b / |g_b|`,
-/// and the foot of vertex `b` has weight `−g_a·g_b / |g_b|²` at a facet vertex `a`.
-#[inline(always)]
+/// and the foot of vertex `b` has weight `−g_a·g_b / |g_b|²` at a facet vertex `a`. (The
+/// step sums these for many cells at once: [`cell_lanes_at`].)
+#[cfg(test)]
 fn repulsion_terms(
     er: &EdgeRepulsion,
     cell: usize,
@@ -1206,6 +1217,124 @@ fn repulsion_terms(
     (f, block)
 }
 
+/// The repulsions and volumetric terms of the cells `cells` (each with the local index of
+/// the vertex asked) at that vertex: [`repulsion_terms`] plus [`Volume::vertex_terms_at`]
+/// summed, [`LANES`] cells at a time, and how far the vertex may move, at least, keeping every
+/// cell upright ([`cell_upright`]). One evaluation of each cell's volume gradients serves its
+/// repulsions, its volumetric term and that reach.
+///
+/// The reach: moving vertex `a` by `δ` changes `D` by `g_a·δ` and, for `b ≠ a`, `g_b` by
+/// `δ × e` (3D; `e` an edge of the facet opposite `a`) or by `δ` turned (2D), so `D ≥ d − |g_a|
+/// |δ|` and `|g_b| ≤ |g_b| + L |δ|` (`L` the facet's longest edge, 1 in 2D). The cell stays
+/// upright (`D > h_min,b |g_b|` for every `b`) while `|δ|` is below each
+/// `(D − h_min,b |g_b|) / (|g_a| + h_min,b L)` (`L` left out for `b = a`, whose `g_a` does not
+/// change); half the smallest is returned, so rounding cannot matter.
+#[inline(always)]
+fn cell_lanes_at<P: Positions + ?Sized>(
+    er: &EdgeRepulsion,
+    volume: Option<&Volume>,
+    cells: &[(u32, u8)],
+    x: &P,
+) -> (Vector, Matrix, Real) {
+    let (ids, _) = er.cells.as_chunks::<SIMPLEX_ARITY>();
+    let (rest_heights, _) = er.h0.as_chunks::<SIMPLEX_ARITY>();
+    let (stiffnesses, _) = er.k.as_chunks::<SIMPLEX_ARITY>();
+    let (one, zero, tiny) = (Lane::ONE, Lane::ZERO, Lane::splat(Real::MIN_POSITIVE));
+    let lane_index = Lane::new(std::array::from_fn(|l| l as Real));
+    let mut f = LaneVector::ZERO;
+    let mut block = [[zero; DIM]; DIM];
+    let mut reach = Real::INFINITY;
+    for batch in cells.chunks(LANES) {
+        // Lanes past the end repeat the last cell and count for nothing.
+        let counted = lane_index.simd_lt(Lane::splat(batch.len() as Real));
+        let lane: [(usize, usize); LANES] = std::array::from_fn(|l| {
+            let (cell, a) = batch[l.min(batch.len() - 1)];
+            (cell as usize, a as usize)
+        });
+        let xs: [LaneVector; SIMPLEX_ARITY] =
+            std::array::from_fn(|b| LaneVector::gather(|l| x.at(ids[lane[l].0][b] as usize)));
+        let sign = Lane::new(lane.map(|(c, _)| er.sign[c]));
+        let (raw, g) = lanes::simplex_gradients(&xs);
+        let d = raw * sign;
+        let vertex = Lane::new(lane.map(|(_, a)| a as Real));
+        let is: [Lane; SIMPLEX_ARITY] =
+            std::array::from_fn(|b| vertex.simd_eq(Lane::splat(b as Real)));
+        // `g_a`, the gradient at each lane's own vertex.
+        let mut ga = LaneVector::ZERO;
+        for b in 0..SIMPLEX_ARITY {
+            ga += g[b].or_zero(is[b]);
+        }
+        let ga_length = ga.length_squared().sqrt();
+        // The longest edge of the facet opposite each lane's vertex (its square).
+        let mut longest = zero;
+        if DIM == 3 {
+            for u in 0..SIMPLEX_ARITY {
+                for w in u + 1..SIMPLEX_ARITY {
+                    let off = !(is[u] | is[w]);
+                    longest = longest.max(off.select((xs[u] - xs[w]).length_squared(), zero));
+                }
+            }
+        } else {
+            longest = one;
+        }
+        let longest = longest.sqrt();
+        let mut lane_reach = d.simd_gt(zero).select(Lane::splat(Real::INFINITY), zero);
+        let mut add_block = |v: LaneVector, s: Lane| {
+            for (c, column) in block.iter_mut().enumerate() {
+                for (r, entry) in column.iter_mut().enumerate() {
+                    *entry += v.0[r] * v.0[c] * s;
+                }
+            }
+        };
+        for b in 0..SIMPLEX_ARITY {
+            let h0 = Lane::new(lane.map(|(c, _)| rest_heights[c][b]));
+            let k = Lane::new(lane.map(|(c, _)| stiffnesses[c][b]));
+            let g2 = g[b].length_squared();
+            let live = g2.simd_gt(tiny) & counted;
+            let g2 = live.select(g2, one);
+            let inv_g2 = one / g2;
+            let len = g2.sqrt();
+            let (push, stiffness) = barrier_lanes(d * len * inv_g2, h0, k);
+            let h_min = Lane::splat(MIN_STEP_HEIGHT) * h0;
+            let room = d - h_min * len;
+            let rate = ga_length + is[b].select(zero, h_min * longest);
+            let allowed = room.simd_gt(zero).select(room / rate, zero);
+            lane_reach = lane_reach.min(live.select(allowed, zero));
+            // The share of the term at the vertex: 1 at it, minus its foot weight on the facet.
+            let share = is[b].select(one, ga.dot(g[b]) * inv_g2);
+            f += g[b].or_zero(live) * (sign * len * inv_g2 * push * share);
+            add_block(g[b], live.select(inv_g2 * stiffness * share * share, zero));
+        }
+        if let Some(volume) = volume {
+            let (force, scale) = volume.vertex_lanes(lane.map(|(c, _)| c), raw, ga);
+            f += force.or_zero(counted);
+            add_block(ga, counted.select(scale, zero));
+        }
+        let lane_reach = counted.select(lane_reach, Lane::splat(Real::INFINITY));
+        reach = lane_reach.to_array().into_iter().fold(reach, Real::min);
+    }
+    let mut out = Matrix::ZERO;
+    for (c, column) in block.iter().enumerate() {
+        for (r, entry) in column.iter().enumerate() {
+            out.col_mut(c)[r] = entry.reduce_add();
+        }
+    }
+    (
+        Vector::from_array(f.0.map(Lane::reduce_add)),
+        out,
+        0.5 * reach,
+    )
+}
+
+/// [`barrier`] in lanes.
+#[inline(always)]
+fn barrier_lanes(h: Lane, h0: Lane, k: Lane) -> (Lane, Lane) {
+    let at = h.max(Lane::splat(MIN_STEP_HEIGHT) * h0);
+    let q = h0 / at;
+    let stiffness = k * (Lane::ONE + q * q);
+    (k * (h0 * q - at) + stiffness * (at - h), stiffness)
+}
+
 /// A repulsion's push `k (h0²/h − h)` and stiffness `k (1 + h0²/h²)` at height `h`, continued
 /// below [`MIN_STEP_HEIGHT`] of the rest height by the law's tangent there (a quadratic energy):
 /// a cell held that flat or turned inside out gets a Newton step that brings it back up to
@@ -1230,6 +1359,39 @@ fn cell_upright(er: &EdgeRepulsion, cell: usize, p: &[Vector; SIMPLEX_ARITY]) ->
         })
 }
 
+/// [`cell_upright`] of the cells `batch` (at most [`LANES`]), node `i` at `p` and the others
+/// at `x`: bit `l` set where cell `l` is.
+#[inline(always)]
+fn uprights<P: Positions + ?Sized>(
+    er: &EdgeRepulsion,
+    batch: &[(u32, u8)],
+    i: usize,
+    p: Vector,
+    x: &P,
+) -> u32 {
+    let (ids, _) = er.cells.as_chunks::<SIMPLEX_ARITY>();
+    let (rest_heights, _) = er.h0.as_chunks::<SIMPLEX_ARITY>();
+    let cell: [usize; LANES] = std::array::from_fn(|l| batch[l.min(batch.len() - 1)].0 as usize);
+    let xs: [LaneVector; SIMPLEX_ARITY] = std::array::from_fn(|b| {
+        LaneVector::gather(|l| {
+            let j = ids[cell[l]][b] as usize;
+            if j == i {
+                p
+            } else {
+                x.at(j)
+            }
+        })
+    });
+    let (d, g) = lanes::simplex_gradients(&xs);
+    let d = d * Lane::new(cell.map(|c| er.sign[c]));
+    let mut ok = d.simd_gt(Lane::ZERO);
+    for (b, gb) in g.iter().enumerate() {
+        let h_min = Lane::splat(MIN_STEP_HEIGHT) * Lane::new(cell.map(|c| rest_heights[c][b]));
+        ok &= (d * d).simd_gt(h_min * h_min * gb.length_squared());
+    }
+    ok.to_bitmask()
+}
+
 /// The smallest height of `cell`'s vertices (at `p`) over their rest heights (negative once
 /// inverted).
 fn height_ratio(er: &EdgeRepulsion, cell: usize, p: &[Vector; SIMPLEX_ARITY]) -> Real {
@@ -1248,7 +1410,7 @@ fn invert(m: Matrix) -> Option<Matrix> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::super::body::DeformableBuilder;
+    use super::super::super::body::{Deformable, DeformableBuilder};
     use super::super::super::math::FACET_ARITY;
     use super::super::super::mesh::CellKind;
     use super::super::edge_repulsion::{repulsion, OPPOSITE};
@@ -1337,5 +1499,91 @@ mod tests {
             }
         }
         assert!(loaded > 10, "the squash loads the barriers");
+    }
+
+    /// An edge-repulsion lattice squashed and sheared, with its volumetric term.
+    fn squashed_er() -> (Deformable, Vec<Vector>) {
+        let body = DeformableBuilder::cuboid(Vector::splat(0.05), [4; math::DIM])
+            .cells(CellKind::Simplex)
+            .model(ElementModel::EdgeRepulsion)
+            .build()
+            .unwrap();
+        let x = super::super::squashed(&body.state.positions, 0.5, 0.6);
+        (body, x)
+    }
+
+    #[test]
+    fn the_cell_lanes_sum_each_cells_terms_at_the_vertex() {
+        let (body, x) = squashed_er();
+        let elements = &body.state.elements;
+        let Elements::EdgeRepulsion(er) = &elements.elements else {
+            unreachable!()
+        };
+        let volume = elements.volume.as_ref();
+        let incidence = Incidence::of(&elements.elements, volume, x.len()).unwrap();
+        let mut scale = 1e-3;
+        let mut results = Vec::new();
+        for i in 0..x.len() {
+            let cells = incidence.cells_of(i);
+            let (f, block, _) = cell_lanes_at(er, volume, cells, &x[..]);
+            let (mut f1, mut block1) = (Vector::ZERO, Matrix::ZERO);
+            for &(cell, a) in cells {
+                let (cell, a) = (cell as usize, a as usize);
+                let (d, g) = cell_geometry(er, cell, &cell_positions(er, cell, &x[..]));
+                let (df, db) = repulsion_terms(er, cell, a, (d, &g));
+                let (dv, dbv) = volume
+                    .unwrap()
+                    .vertex_terms_at(cell, a, d * er.sign[cell], &g);
+                (f1, block1) = (f1 + df + dv, block1 + db + dbv);
+            }
+            scale = f1.length().max(scale);
+            results.push((f, f1, block, block1));
+        }
+        for (i, (f, f1, block, block1)) in results.into_iter().enumerate() {
+            assert!((f - f1).length() < 1e-4 * scale, "node {i}: {f} {f1}");
+            let b_scale = max_diff(block1, Matrix::ZERO).max(1e-3);
+            assert!(max_diff(block, block1) < 1e-4 * b_scale, "node {i}");
+        }
+    }
+
+    #[test]
+    fn a_node_moved_within_its_reach_leaves_its_cells_upright() {
+        let (body, x) = squashed_er();
+        let elements = &body.state.elements;
+        let Elements::EdgeRepulsion(er) = &elements.elements else {
+            unreachable!()
+        };
+        let volume = elements.volume.as_ref();
+        let incidence = Incidence::of(&elements.elements, volume, x.len()).unwrap();
+        let mut reaches = Vec::new();
+        for i in 0..x.len() {
+            let cells = incidence.cells_of(i);
+            let (_, _, reach) = cell_lanes_at(er, volume, cells, &x[..]);
+            reaches.push(reach);
+            // Along each axis and diagonal, both ways, at the reach and at twice it (what
+            // rounding and the half kept in hand allow).
+            for k in 0..3usize.pow(math::DIM as u32) {
+                let mut dir = Vector::ZERO;
+                for d in 0..math::DIM {
+                    dir[d] = (k / 3usize.pow(d as u32) % 3) as Real - 1.0;
+                }
+                if dir == Vector::ZERO {
+                    continue;
+                }
+                let mut y = x.clone();
+                y[i] += dir.normalize() * (1.999 * reach);
+                for &(cell, _) in cells {
+                    let cell = cell as usize;
+                    assert!(
+                        cell_upright(er, cell, &cell_positions(er, cell, &y[..])),
+                        "node {i}, cell {cell}, moved {reach} along {dir}"
+                    );
+                }
+            }
+        }
+        // The reach is within the squashed cells' height, and mostly not zero.
+        let height = 0.5 * 0.1 / 3.0;
+        assert!(reaches.iter().all(|r| *r < height), "{reaches:?}");
+        assert!(reaches.iter().filter(|r| **r > 0.0).count() > x.len() / 2);
     }
 }

@@ -180,6 +180,22 @@ impl Volume {
         (-g[a] * (k * strain), block)
     }
 
+    /// [`Volume::vertex_terms_at`] of [`LANES`] cells `cells` at one vertex each, from their
+    /// `D` and the gradient `ga` at that vertex: the force, and the scale `s` of the block
+    /// `s ga gaᵀ`.
+    #[inline(always)]
+    pub fn vertex_lanes(
+        &self,
+        cells: [usize; LANES],
+        d: Lane,
+        ga: LaneVector,
+    ) -> (LaneVector, Lane) {
+        let d0 = Lane::new(cells.map(|c| self.d0[c]));
+        let (strain, k) = (d / d0 - Lane::ONE, Lane::new(cells.map(|c| self.k[c])) / d0);
+        let scale = (k * d0).simd_gt(Lane::ZERO).select(k / d0, Lane::ZERO);
+        (-(ga * (k * strain)), scale)
+    }
+
     #[cfg(test)]
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
         self.energy_of(x, 0..self.d0.len())

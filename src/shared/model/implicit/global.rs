@@ -750,7 +750,7 @@ impl Solve<'_> {
         let mut pre = vec![Matrix::ZERO; n];
         for i in 0..n {
             if free[i] {
-                let (f, block) = self.vertex.newton(i, x, self.masses[i] / h2, self.y[i]);
+                let (f, block, _) = self.vertex.newton(i, x, self.masses[i] / h2, self.y[i]);
                 r[i] = f;
                 pre[i] = invert(block).unwrap_or(Matrix::ZERO);
             }
