@@ -42,6 +42,7 @@ use super::super::material::Resolved;
 use super::super::math::{self, Real, Vector, FACET_ARITY, SIMPLEX_ARITY};
 use super::super::mesh::Mesh;
 use super::lanes::{self, Lane, LaneVector, LANES};
+use super::nonlinear_springs::{SERIES, SERIES_REACH};
 use super::springs::{Law, Springs};
 use super::volume::Volume;
 use super::{Accumulator, NodeBounds};
@@ -351,20 +352,16 @@ impl EdgeRepulsion {
     }
 }
 
-/// The energy of a repulsion over `k h0²` at the relative height `1 + t`:
-/// `(u² − 1)/2 − ln u`, `u = 1 + t` (the integral of [`magnitude`]), which is
-/// `t² − t³/3 + t⁴/4 − …`. Near rest its two terms cancel to `t²` (at `t = 10⁻⁴`, single
-/// precision kept one digit), so there it is the series, exact in single precision up to
-/// `|t| = ⅛` with six terms after `t²`.
+/// [`stored`](super::nonlinear_springs::stored) in lanes: the energy of a repulsion over `k h0²` at the
+/// relative height `1 + t` (the law is the nonlinear spring's, on the height).
 #[inline(always)]
 fn stored(t: Lane) -> Lane {
-    let mut series = Lane::splat(1.0 / 8.0);
-    for n in (3..8).rev() {
-        let c = if n % 2 == 0 { 1.0 } else { -1.0 } / n as Real;
-        series = Lane::splat(c) + t * series;
-    }
+    let series = SERIES
+        .iter()
+        .rev()
+        .fold(Lane::ZERO, |s, c| Lane::splat(*c) + t * s);
     let near = t * t * (Lane::ONE + t * series);
-    let far = t.abs().simd_ge(Lane::splat(0.125));
+    let far = t.abs().simd_ge(Lane::splat(SERIES_REACH));
     if far.any() {
         let u = Lane::ONE + t;
         far.select(Lane::splat(0.5) * (u * u - Lane::ONE) - u.ln(), near)
