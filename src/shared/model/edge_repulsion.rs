@@ -41,20 +41,11 @@
 use super::super::material::Resolved;
 use super::super::math::{self, Real, Vector, FACET_ARITY, SIMPLEX_ARITY};
 use super::super::mesh::Mesh;
-use super::lanes::{self, Lane, LaneVector, LANES};
+use super::lanes::{self, each, Lane, LaneVector, LANES};
 use super::nonlinear_springs::{SERIES, SERIES_REACH};
 use super::springs::{Law, Springs};
 use super::volume::Volume;
 use super::{Accumulator, NodeBounds};
-
-/// Per lane: a cell's vertex indices, the sign of its rest `D`, and per vertex the rest
-/// height and stiffness of its repulsion.
-type CellLanes<'a> = (
-    [&'a [u32; SIMPLEX_ARITY]; LANES],
-    [&'a Real; LANES],
-    [&'a [Real; SIMPLEX_ARITY]; LANES],
-    [&'a [Real; SIMPLEX_ARITY]; LANES],
-);
 
 /// Calibration constant `s` of the ER material mapping: 47/33 in 3D, 5/6 in 2D (see the
 /// module's docs).
@@ -298,19 +289,11 @@ impl EdgeRepulsion {
         ),
     ) -> Real {
         let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
-        let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
-        let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
         let mut limit = Real::INFINITY;
         for first in cells.clone().step_by(LANES) {
             // The last batch repeats its last cell in the lanes past the end.
-            let batch: [usize; LANES] = std::array::from_fn(|l| (first + l).min(cells.end - 1));
-            let data = (
-                batch.map(|c| &ids[c]),
-                batch.map(|c| &self.sign[c]),
-                batch.map(|c| &h0[c]),
-                batch.map(|c| &k[c]),
-            );
-            let (f, rows, batch_limit) = cell_terms(batch, data, x, v, volume);
+            let batch: [usize; LANES] = each(|l| (first + l).min(cells.end - 1));
+            let (f, rows, batch_limit) = cell_terms(self, batch, x, v, volume);
             for l in 0..LANES.min(cells.end - first) {
                 out(first + l, &ids[first + l], &f[l], &rows[l]);
             }
@@ -324,22 +307,22 @@ impl EdgeRepulsion {
         let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
         let (h0, _) = self.h0.as_chunks::<SIMPLEX_ARITY>();
         let (k, _) = self.k.as_chunks::<SIMPLEX_ARITY>();
-        let lane_index = Lane::new(std::array::from_fn(|l| l as Real));
+        let lane_index = Lane::new(each(|l| l as Real));
         let tiny = Lane::splat(Real::MIN_POSITIVE);
         let mut e = Lane::ZERO;
         for first in cells.clone().step_by(LANES) {
             // The last batch repeats its last cell in the lanes past the end, and counts it
             // once.
-            let batch: [usize; LANES] = std::array::from_fn(|l| (first + l).min(cells.end - 1));
+            let batch: [usize; LANES] = each(|l| (first + l).min(cells.end - 1));
             let counted = lane_index.simd_lt(Lane::splat((cells.end - first) as Real));
             let xs: [LaneVector; SIMPLEX_ARITY] =
-                std::array::from_fn(|a| LaneVector::gather(|l| x[ids[batch[l]][a] as usize]));
-            let sign = Lane::new(batch.map(|c| self.sign[c]));
+                each(|a| LaneVector::gather(|l| x[ids[batch[l]][a] as usize]));
+            let sign = Lane::new(each(|l| self.sign[batch[l]]));
             // The heights as the forces measure them (`cell_terms`).
             let (_, g) = lanes::simplex_gradients(&xs);
             for a in 0..SIMPLEX_ARITY {
-                let h0 = Lane::new(batch.map(|c| h0[c][a]));
-                let k = Lane::new(batch.map(|c| k[c][a]));
+                let h0 = Lane::new(each(|l| h0[batch[l]][a]));
+                let k = Lane::new(each(|l| k[batch[l]][a]));
                 let g2 = g[a].length_squared();
                 let live = g2.simd_gt(tiny) & counted;
                 let len = live.select(g2, Lane::ONE).sqrt();
@@ -370,15 +353,14 @@ fn stored(t: Lane) -> Lane {
     }
 }
 
-/// The repulsions of [`LANES`] cells (`cells`, each vertex's index `ids`, `sign` of the rest
-/// `D`, and per vertex the rest height `h0` and stiffness `k`) and their `volume` terms,
-/// summed per vertex: each cell's force on each vertex and its Gershgorin stiffness row, and
-/// the crossing limiter of the cells (infinite when no vertex approaches its facet).
+/// The repulsions of [`LANES`] cells `cells` of `er` and their `volume` terms, summed per
+/// vertex: each cell's force on each vertex and its Gershgorin stiffness row, and the crossing
+/// limiter of the cells (infinite when no vertex approaches its facet).
 #[inline(always)]
 #[allow(clippy::type_complexity)]
 fn cell_terms(
+    er: &EdgeRepulsion,
     cells: [usize; LANES],
-    (ids, sign, rest_heights, stiffnesses): CellLanes<'_>,
     x: &[Vector],
     v: &[Vector],
     volume: Option<&Volume>,
@@ -387,13 +369,15 @@ fn cell_terms(
     [[Real; SIMPLEX_ARITY]; LANES],
     Real,
 ) {
+    let (ids, _) = er.cells.as_chunks::<SIMPLEX_ARITY>();
+    let (rest_heights, _) = er.h0.as_chunks::<SIMPLEX_ARITY>();
+    let (stiffnesses, _) = er.k.as_chunks::<SIMPLEX_ARITY>();
     let xs: [LaneVector; SIMPLEX_ARITY] =
-        std::array::from_fn(|a| LaneVector::gather(|l| x[ids[l][a] as usize]));
+        each(|a| LaneVector::gather(|l| x[ids[cells[l]][a] as usize]));
     let vs: [LaneVector; SIMPLEX_ARITY] =
-        std::array::from_fn(|a| LaneVector::gather(|l| v[ids[l][a] as usize]));
-    let per_vertex =
-        |t: &[&[Real; SIMPLEX_ARITY]; LANES], a: usize| Lane::new(std::array::from_fn(|l| t[l][a]));
-    let sign = Lane::new(sign.map(|s| *s));
+        each(|a| LaneVector::gather(|l| v[ids[cells[l]][a] as usize]));
+    let per_vertex = |t: &[[Real; SIMPLEX_ARITY]], a: usize| Lane::new(each(|l| t[cells[l]][a]));
+    let sign = Lane::new(each(|l| er.sign[cells[l]]));
     // One evaluation of the cells' volume gradients serves every repulsion and the volumetric
     // term: `g_a` is normal to the facet opposite `a`, `n = sign · g_a / |g_a|` points to `a`'s
     // rest side, and the foot's weight at facet vertex `b` is `−g_a·g_b / |g_a|²`. The height
@@ -408,7 +392,7 @@ fn cell_terms(
     let (one, tiny) = (Lane::ONE, Lane::splat(Real::MIN_POSITIVE));
     for a in 0..SIMPLEX_ARITY {
         let f = OPPOSITE[a];
-        let (h0, k) = (per_vertex(&rest_heights, a), per_vertex(&stiffnesses, a));
+        let (h0, k) = (per_vertex(rest_heights, a), per_vertex(stiffnesses, a));
         let g2 = g[a].length_squared();
         // A facet collapsed to a point or a line has no direction this substep: no push, the
         // foot's weights even, the stiffness at rest.
@@ -424,8 +408,7 @@ fn cell_terms(
         let push = live.select(k * (h0 * h0 / hc - h), Lane::ZERO);
         let push = normal.or_zero(live) * push;
         let even = Lane::splat(1.0 / FACET_ARITY as Real);
-        let w: [Lane; FACET_ARITY] =
-            std::array::from_fn(|m| live.select(-g[a].dot(g[f[m]]) / g2, even));
+        let w: [Lane; FACET_ARITY] = each(|m| live.select(-g[a].dot(g[f[m]]) / g2, even));
         force[a] += push;
         let mut foot_velocity = LaneVector::ZERO;
         let mut wsum = one;
@@ -452,12 +435,12 @@ fn cell_terms(
             stiffness[a] += k[a];
         }
     }
-    let force = force.map(LaneVector::lanes);
-    let stiffness = stiffness.map(Lane::to_array);
+    let force: [[Vector; LANES]; SIMPLEX_ARITY] = each(|a| force[a].lanes());
+    let stiffness: [[Real; LANES]; SIMPLEX_ARITY] = each(|a| stiffness[a].to_array());
     let limit = limit.to_array().into_iter().fold(Real::INFINITY, Real::min);
     (
-        std::array::from_fn(|l| std::array::from_fn(|a| force[a][l])),
-        std::array::from_fn(|l| std::array::from_fn(|a| stiffness[a][l])),
+        each(|l| each(|a| force[a][l])),
+        each(|l| each(|a| stiffness[a][l])),
         limit,
     )
 }

@@ -65,7 +65,7 @@ use super::super::math::{self, Matrix, Real, Rotation, Vector, DIM, SIMPLEX_ARIT
 use super::super::threads;
 use super::edge_repulsion::EdgeRepulsion;
 use super::hessian;
-use super::lanes::{self, Lane, LaneVector, LANES};
+use super::lanes::{self, each, Lane, LaneVector, LANES};
 use super::shape_matching::ShapeMatching;
 use super::springs::{Law, Springs};
 use super::volume::Volume;
@@ -1240,25 +1240,24 @@ fn cell_lanes_at<P: Positions + ?Sized>(
     let (rest_heights, _) = er.h0.as_chunks::<SIMPLEX_ARITY>();
     let (stiffnesses, _) = er.k.as_chunks::<SIMPLEX_ARITY>();
     let (one, zero, tiny) = (Lane::ONE, Lane::ZERO, Lane::splat(Real::MIN_POSITIVE));
-    let lane_index = Lane::new(std::array::from_fn(|l| l as Real));
+    let lane_index = Lane::new(each(|l| l as Real));
     let mut f = LaneVector::ZERO;
     let mut block = [[zero; DIM]; DIM];
     let mut reach = Real::INFINITY;
     for batch in cells.chunks(LANES) {
         // Lanes past the end repeat the last cell and count for nothing.
         let counted = lane_index.simd_lt(Lane::splat(batch.len() as Real));
-        let lane: [(usize, usize); LANES] = std::array::from_fn(|l| {
+        let lane: [(usize, usize); LANES] = each(|l| {
             let (cell, a) = batch[l.min(batch.len() - 1)];
             (cell as usize, a as usize)
         });
         let xs: [LaneVector; SIMPLEX_ARITY] =
-            std::array::from_fn(|b| LaneVector::gather(|l| x.at(ids[lane[l].0][b] as usize)));
-        let sign = Lane::new(lane.map(|(c, _)| er.sign[c]));
+            each(|b| LaneVector::gather(|l| x.at(ids[lane[l].0][b] as usize)));
+        let sign = Lane::new(each(|l| er.sign[lane[l].0]));
         let (raw, g) = lanes::simplex_gradients(&xs);
         let d = raw * sign;
-        let vertex = Lane::new(lane.map(|(_, a)| a as Real));
-        let is: [Lane; SIMPLEX_ARITY] =
-            std::array::from_fn(|b| vertex.simd_eq(Lane::splat(b as Real)));
+        let vertex = Lane::new(each(|l| lane[l].1 as Real));
+        let is: [Lane; SIMPLEX_ARITY] = each(|b| vertex.simd_eq(Lane::splat(b as Real)));
         // `g_a`, the gradient at each lane's own vertex.
         let mut ga = LaneVector::ZERO;
         for b in 0..SIMPLEX_ARITY {
@@ -1287,8 +1286,8 @@ fn cell_lanes_at<P: Positions + ?Sized>(
             }
         };
         for b in 0..SIMPLEX_ARITY {
-            let h0 = Lane::new(lane.map(|(c, _)| rest_heights[c][b]));
-            let k = Lane::new(lane.map(|(c, _)| stiffnesses[c][b]));
+            let h0 = Lane::new(each(|l| rest_heights[lane[l].0][b]));
+            let k = Lane::new(each(|l| stiffnesses[lane[l].0][b]));
             let g2 = g[b].length_squared();
             let live = g2.simd_gt(tiny) & counted;
             let g2 = live.select(g2, one);
@@ -1306,7 +1305,7 @@ fn cell_lanes_at<P: Positions + ?Sized>(
             add_block(g[b], live.select(inv_g2 * stiffness * share * share, zero));
         }
         if let Some(volume) = volume {
-            let (force, scale) = volume.vertex_lanes(lane.map(|(c, _)| c), raw, ga);
+            let (force, scale) = volume.vertex_lanes(each(|l| lane[l].0), raw, ga);
             f += force.or_zero(counted);
             add_block(ga, counted.select(scale, zero));
         }
@@ -1320,7 +1319,7 @@ fn cell_lanes_at<P: Positions + ?Sized>(
         }
     }
     (
-        Vector::from_array(f.0.map(Lane::reduce_add)),
+        Vector::from_array(each(|d| f.0[d].reduce_add())),
         out,
         0.5 * reach,
     )
@@ -1371,8 +1370,8 @@ fn uprights<P: Positions + ?Sized>(
 ) -> u32 {
     let (ids, _) = er.cells.as_chunks::<SIMPLEX_ARITY>();
     let (rest_heights, _) = er.h0.as_chunks::<SIMPLEX_ARITY>();
-    let cell: [usize; LANES] = std::array::from_fn(|l| batch[l.min(batch.len() - 1)].0 as usize);
-    let xs: [LaneVector; SIMPLEX_ARITY] = std::array::from_fn(|b| {
+    let cell: [usize; LANES] = each(|l| batch[l.min(batch.len() - 1)].0 as usize);
+    let xs: [LaneVector; SIMPLEX_ARITY] = each(|b| {
         LaneVector::gather(|l| {
             let j = ids[cell[l]][b] as usize;
             if j == i {
@@ -1383,10 +1382,10 @@ fn uprights<P: Positions + ?Sized>(
         })
     });
     let (d, g) = lanes::simplex_gradients(&xs);
-    let d = d * Lane::new(cell.map(|c| er.sign[c]));
+    let d = d * Lane::new(each(|l| er.sign[cell[l]]));
     let mut ok = d.simd_gt(Lane::ZERO);
     for (b, gb) in g.iter().enumerate() {
-        let h_min = Lane::splat(MIN_STEP_HEIGHT) * Lane::new(cell.map(|c| rest_heights[c][b]));
+        let h_min = Lane::splat(MIN_STEP_HEIGHT) * Lane::new(each(|l| rest_heights[cell[l]][b]));
         ok &= (d * d).simd_gt(h_min * h_min * gb.length_squared());
     }
     ok.to_bitmask()

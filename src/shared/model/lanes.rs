@@ -15,8 +15,19 @@ pub(crate) type Lane = wide::f32x4;
 /// Cells evaluated together.
 pub(crate) const LANES: usize = 4;
 
+/// `[f(0), f(1), …]`: [`std::array::from_fn`] in a loop the optimiser unrolls, so that the
+/// kernels' many small arrays stay in registers (`from_fn` was left a call in some builds).
+#[inline(always)]
+pub(crate) fn each<T: Copy + Default, const N: usize>(mut f: impl FnMut(usize) -> T) -> [T; N] {
+    let mut out = [T::default(); N];
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = f(i);
+    }
+    out
+}
+
 /// A vector per lane, stored by component.
-#[derive(Copy, Clone, Debug)]
+#[derive(Copy, Clone, Debug, Default)]
 pub(crate) struct LaneVector(pub [Lane; DIM]);
 
 impl LaneVector {
@@ -25,17 +36,15 @@ impl LaneVector {
     /// Lane `l` holds `p(l)`.
     #[inline(always)]
     pub fn gather(p: impl Fn(usize) -> Vector) -> Self {
-        let points: [Vector; LANES] = std::array::from_fn(p);
-        LaneVector(std::array::from_fn(|d| {
-            Lane::new(std::array::from_fn(|l| points[l][d]))
-        }))
+        let points: [Vector; LANES] = each(p);
+        LaneVector(each(|d| Lane::new(each(|l| points[l][d]))))
     }
 
     /// The vector of each lane.
     #[inline(always)]
     pub fn lanes(self) -> [Vector; LANES] {
-        let c: [[Real; LANES]; DIM] = std::array::from_fn(|d| self.0[d].to_array());
-        std::array::from_fn(|l| {
+        let c: [[Real; LANES]; DIM] = each(|d| self.0[d].to_array());
+        each(|l| {
             let mut v = Vector::ZERO;
             for d in 0..DIM {
                 v[d] = c[d][l];
@@ -61,7 +70,7 @@ impl LaneVector {
     /// Each lane's vector where `mask` is set, else zero.
     #[inline(always)]
     pub fn or_zero(self, mask: Lane) -> LaneVector {
-        LaneVector(self.0.map(|c| mask.select(c, Lane::ZERO)))
+        LaneVector(each(|d| mask.select(self.0[d], Lane::ZERO)))
     }
 }
 
@@ -69,7 +78,7 @@ impl Add for LaneVector {
     type Output = LaneVector;
     #[inline(always)]
     fn add(self, o: LaneVector) -> LaneVector {
-        LaneVector(std::array::from_fn(|d| self.0[d] + o.0[d]))
+        LaneVector(each(|d| self.0[d] + o.0[d]))
     }
 }
 
@@ -84,7 +93,7 @@ impl Sub for LaneVector {
     type Output = LaneVector;
     #[inline(always)]
     fn sub(self, o: LaneVector) -> LaneVector {
-        LaneVector(std::array::from_fn(|d| self.0[d] - o.0[d]))
+        LaneVector(each(|d| self.0[d] - o.0[d]))
     }
 }
 
@@ -92,7 +101,7 @@ impl Neg for LaneVector {
     type Output = LaneVector;
     #[inline(always)]
     fn neg(self) -> LaneVector {
-        LaneVector(self.0.map(|c| -c))
+        LaneVector(each(|d| -self.0[d]))
     }
 }
 
@@ -100,7 +109,7 @@ impl Mul<Lane> for LaneVector {
     type Output = LaneVector;
     #[inline(always)]
     fn mul(self, s: Lane) -> LaneVector {
-        LaneVector(self.0.map(|c| c * s))
+        LaneVector(each(|d| self.0[d] * s))
     }
 }
 
@@ -110,25 +119,17 @@ impl Mul<Lane> for LaneVector {
 pub(crate) fn simplex_gradients(
     p: &[LaneVector; SIMPLEX_ARITY],
 ) -> (Lane, [LaneVector; SIMPLEX_ARITY]) {
-    let e: [LaneVector; DIM] = std::array::from_fn(|k| p[k + 1] - p[0]);
+    let e: [LaneVector; DIM] = each(|k| p[k + 1] - p[0]);
     // 3D: g₁ = e₂ × e₃, g₂ = e₃ × e₁, g₃ = e₁ × e₂; 2D: g₁ = −e₂⊥, g₂ = e₁⊥ (⊥: a quarter
     // turn to the left). The indices wrap at `DIM` so that both forms index within bounds.
     let cross = |a: LaneVector, b: LaneVector| {
-        LaneVector(std::array::from_fn(|d| {
+        LaneVector(each(|d| {
             let (i, j) = ((d + 1) % DIM, (d + 2) % DIM);
             a.0[i] * b.0[j] - a.0[j] * b.0[i]
         }))
     };
-    let perp = |a: LaneVector| {
-        LaneVector(std::array::from_fn(|d| {
-            if d == 0 {
-                -a.0[1 % DIM]
-            } else {
-                a.0[0]
-            }
-        }))
-    };
-    let g: [LaneVector; DIM] = std::array::from_fn(|k| {
+    let perp = |a: LaneVector| LaneVector(each(|d| if d == 0 { -a.0[1 % DIM] } else { a.0[0] }));
+    let g: [LaneVector; DIM] = each(|k| {
         if DIM == 3 {
             cross(e[(k + 1) % DIM], e[(k + 2) % DIM])
         } else if k == 0 {
@@ -142,10 +143,7 @@ pub(crate) fn simplex_gradients(
         sum += *gk;
     }
     let d = e[0].dot(g[0]);
-    (
-        d,
-        std::array::from_fn(|a| if a == 0 { -sum } else { g[a - 1] }),
-    )
+    (d, each(|a| if a == 0 { -sum } else { g[a - 1] }))
 }
 
 #[cfg(test)]

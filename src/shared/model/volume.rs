@@ -10,7 +10,7 @@
 //! block out then (its gradient is exact either way).
 
 use super::super::math::{self, Matrix, Real, Vector, DIM, DIM_FACTORIAL, SIMPLEX_ARITY};
-use super::lanes::{Lane, LaneVector, LANES};
+use super::lanes::{each, Lane, LaneVector, LANES};
 use super::Accumulator;
 
 /// The scale `σ` of a model's own terms and the volumetric modulus `κ` (over `E`) that give a
@@ -138,17 +138,17 @@ impl Volume {
         g: &[LaneVector; SIMPLEX_ARITY],
         length: &[Lane; SIMPLEX_ARITY],
     ) -> ([LaneVector; SIMPLEX_ARITY], [Lane; SIMPLEX_ARITY]) {
-        let d0 = Lane::new(cells.map(|c| self.d0[c]));
-        let (strain, k) = (d / d0 - Lane::ONE, Lane::new(cells.map(|c| self.k[c])) / d0);
+        let d0 = Lane::new(each(|l| self.d0[cells[l]]));
+        let (strain, k) = (
+            d / d0 - Lane::ONE,
+            Lane::new(each(|l| self.k[cells[l]])) / d0,
+        );
         let mut sum = length[0];
         for l in &length[1..] {
             sum += *l;
         }
         let row = (k / d0).abs() * sum;
-        (
-            std::array::from_fn(|a| -(g[a] * (k * strain))),
-            std::array::from_fn(|a| row * length[a]),
-        )
+        (each(|a| -(g[a] * (k * strain))), each(|a| row * length[a]))
     }
 
     /// Vertex `a` of `cell`: `−∂E/∂x_a` and its Gauss–Newton block `κ V0 ∇_a J ∇_a Jᵀ` (left
@@ -190,8 +190,11 @@ impl Volume {
         d: Lane,
         ga: LaneVector,
     ) -> (LaneVector, Lane) {
-        let d0 = Lane::new(cells.map(|c| self.d0[c]));
-        let (strain, k) = (d / d0 - Lane::ONE, Lane::new(cells.map(|c| self.k[c])) / d0);
+        let d0 = Lane::new(each(|l| self.d0[cells[l]]));
+        let (strain, k) = (
+            d / d0 - Lane::ONE,
+            Lane::new(each(|l| self.k[cells[l]])) / d0,
+        );
         let scale = (k * d0).simd_gt(Lane::ZERO).select(k / d0, Lane::ZERO);
         (-(ga * (k * strain)), scale)
     }
