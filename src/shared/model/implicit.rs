@@ -1409,7 +1409,7 @@ fn invert(m: Matrix) -> Option<Matrix> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::super::body::{Deformable, DeformableBuilder};
+    use super::super::super::body::DeformableBuilder;
     use super::super::super::math::FACET_ARITY;
     use super::super::super::mesh::CellKind;
     use super::super::edge_repulsion::{repulsion, OPPOSITE};
@@ -1500,89 +1500,88 @@ mod tests {
         assert!(loaded > 10, "the squash loads the barriers");
     }
 
-    /// An edge-repulsion lattice squashed and sheared, with its volumetric term.
-    fn squashed_er() -> (Deformable, Vec<Vector>) {
+    /// Calls `check` with an edge-repulsion lattice squashed and sheared: its elements, its
+    /// volumetric term, their incidence and the squashed positions.
+    fn with_squashed_er(
+        check: impl FnOnce(&EdgeRepulsion, Option<&Volume>, &Incidence, &[Vector]),
+    ) {
         let body = DeformableBuilder::cuboid(Vector::splat(0.05), [4; math::DIM])
             .cells(CellKind::Simplex)
             .model(ElementModel::EdgeRepulsion)
             .build()
             .unwrap();
         let x = super::super::squashed(&body.state.positions, 0.5, 0.6);
-        (body, x)
+        let elements = &body.state.elements;
+        let Elements::EdgeRepulsion(er) = &elements.elements else {
+            unreachable!()
+        };
+        let volume = elements.volume.as_ref();
+        let incidence = Incidence::of(&elements.elements, volume, x.len()).unwrap();
+        check(er, volume, &incidence, &x);
     }
 
     #[test]
     fn the_cell_lanes_sum_each_cells_terms_at_the_vertex() {
-        let (body, x) = squashed_er();
-        let elements = &body.state.elements;
-        let Elements::EdgeRepulsion(er) = &elements.elements else {
-            unreachable!()
-        };
-        let volume = elements.volume.as_ref();
-        let incidence = Incidence::of(&elements.elements, volume, x.len()).unwrap();
-        let mut scale = 1e-3;
-        let mut results = Vec::new();
-        for i in 0..x.len() {
-            let cells = incidence.cells_of(i);
-            let (f, block, _) = cell_lanes_at(er, volume, cells, &x[..]);
-            let (mut f1, mut block1) = (Vector::ZERO, Matrix::ZERO);
-            for &(cell, a) in cells {
-                let (cell, a) = (cell as usize, a as usize);
-                let (d, g) = cell_geometry(er, cell, &cell_positions(er, cell, &x[..]));
-                let (df, db) = repulsion_terms(er, cell, a, (d, &g));
-                let (dv, dbv) = volume
-                    .unwrap()
-                    .vertex_terms_at(cell, a, d * er.sign[cell], &g);
-                (f1, block1) = (f1 + df + dv, block1 + db + dbv);
+        with_squashed_er(|er, volume, incidence, x| {
+            let mut scale = 1e-3;
+            let mut results = Vec::new();
+            for i in 0..x.len() {
+                let cells = incidence.cells_of(i);
+                let (f, block, _) = cell_lanes_at(er, volume, cells, x);
+                let (mut f1, mut block1) = (Vector::ZERO, Matrix::ZERO);
+                for &(cell, a) in cells {
+                    let (cell, a) = (cell as usize, a as usize);
+                    let (d, g) = cell_geometry(er, cell, &cell_positions(er, cell, x));
+                    let (df, db) = repulsion_terms(er, cell, a, (d, &g));
+                    let (dv, dbv) = volume
+                        .unwrap()
+                        .vertex_terms_at(cell, a, d * er.sign[cell], &g);
+                    (f1, block1) = (f1 + df + dv, block1 + db + dbv);
+                }
+                scale = f1.length().max(scale);
+                results.push((f, f1, block, block1));
             }
-            scale = f1.length().max(scale);
-            results.push((f, f1, block, block1));
-        }
-        for (i, (f, f1, block, block1)) in results.into_iter().enumerate() {
-            assert!((f - f1).length() < 1e-4 * scale, "node {i}: {f} {f1}");
-            let b_scale = max_diff(block1, Matrix::ZERO).max(1e-3);
-            assert!(max_diff(block, block1) < 1e-4 * b_scale, "node {i}");
-        }
+            for (i, (f, f1, block, block1)) in results.into_iter().enumerate() {
+                assert!((f - f1).length() < 1e-4 * scale, "node {i}: {f} {f1}");
+                let b_scale = max_diff(block1, Matrix::ZERO).max(1e-3);
+                assert!(max_diff(block, block1) < 1e-4 * b_scale, "node {i}");
+            }
+        });
     }
 
     #[test]
     fn a_node_moved_within_its_reach_leaves_its_cells_upright() {
-        let (body, x) = squashed_er();
-        let elements = &body.state.elements;
-        let Elements::EdgeRepulsion(er) = &elements.elements else {
-            unreachable!()
-        };
-        let volume = elements.volume.as_ref();
-        let incidence = Incidence::of(&elements.elements, volume, x.len()).unwrap();
-        let mut reaches = Vec::new();
-        for i in 0..x.len() {
-            let cells = incidence.cells_of(i);
-            let (_, _, reach) = cell_lanes_at(er, volume, cells, &x[..]);
-            reaches.push(reach);
-            // Along each axis and diagonal, both ways, at the reach and at twice it (what
-            // rounding and the half kept in hand allow).
-            for k in 0..3usize.pow(math::DIM as u32) {
-                let mut dir = Vector::ZERO;
-                for d in 0..math::DIM {
-                    dir[d] = (k / 3usize.pow(d as u32) % 3) as Real - 1.0;
-                }
-                if dir == Vector::ZERO {
-                    continue;
-                }
-                let mut y = x.clone();
-                y[i] += dir.normalize() * (1.999 * reach);
-                for &(cell, _) in cells {
-                    let cell = cell as usize;
-                    assert!(
-                        cell_upright(er, cell, &cell_positions(er, cell, &y[..])),
-                        "node {i}, cell {cell}, moved {reach} along {dir}"
-                    );
+        with_squashed_er(|er, volume, incidence, x| {
+            let mut reaches = Vec::new();
+            for i in 0..x.len() {
+                let cells = incidence.cells_of(i);
+                let (_, _, reach) = cell_lanes_at(er, volume, cells, x);
+                reaches.push(reach);
+                // Along each axis and diagonal, both ways, at the reach and at twice it (what
+                // rounding and the half kept in hand allow).
+                for k in 0..3usize.pow(math::DIM as u32) {
+                    let mut dir = Vector::ZERO;
+                    for d in 0..math::DIM {
+                        dir[d] = (k / 3usize.pow(d as u32) % 3) as Real - 1.0;
+                    }
+                    if dir == Vector::ZERO {
+                        continue;
+                    }
+                    let mut y = x.to_vec();
+                    y[i] += dir.normalize() * (1.999 * reach);
+                    for &(cell, _) in cells {
+                        let cell = cell as usize;
+                        assert!(
+                            cell_upright(er, cell, &cell_positions(er, cell, &y[..])),
+                            "node {i}, cell {cell}, moved {reach} along {dir}"
+                        );
+                    }
                 }
             }
-        }
-        // The reach is within the squashed cells' height, and mostly not zero.
-        let height = 0.5 * 0.1 / 3.0;
-        assert!(reaches.iter().all(|r| *r < height), "{reaches:?}");
-        assert!(reaches.iter().filter(|r| **r > 0.0).count() > x.len() / 2);
+            // The reach is within the squashed cells' height, and mostly not zero.
+            let height = 0.5 * 0.1 / 3.0;
+            assert!(reaches.iter().all(|r| *r < height), "{reaches:?}");
+            assert!(reaches.iter().filter(|r| **r > 0.0).count() > x.len() / 2);
+        });
     }
 }
