@@ -194,12 +194,14 @@ pub enum Integrator {
     /// motion then carried on to the step's end, so that undamped motion keeps its energy and
     /// its angular momentum (a spin, a ring) where backward Euler removes some of each every
     /// step. Unconverged sweeps can make the midpoint rule unstable on a stiff body, so the
-    /// body keeps its angular momentum exactly and ends no step with more energy than its
-    /// budget (what it had when last touched) except what lies in its elastic energy, which
-    /// the next steps remove by backward Euler (`integrator/midpoint.rs` tells how). Bodies
+    /// body keeps its angular momentum exactly and ends each step with the energy the step
+    /// owes it (what it had at the start less what the sweeps, the damping or backward Euler
+    /// lost), set through its motion relative to its rigid motion; an excess that lies in its
+    /// elastic energy the next steps remove by backward Euler (`integrator/midpoint.rs` tells
+    /// how). Bodies
     /// bound to bones (unless
     /// [`PipelineSettings::global_iterations`](super::PipelineSettings::global_iterations)
-    /// solves them whole: their bones do work, so no budget guards them and their solve must
+    /// solves them whole: their bones do work, so nothing holds their energy and their solve must
     /// converge), steps in which a contact acts (or may act on a body still ringing from a
     /// contact), and islands solved with their contacts take backward Euler as
     /// [`Integrator::Implicit`] does, with the same `iterations`; but a body (no bone, no other
@@ -210,12 +212,12 @@ pub enum Integrator {
     /// would at 1 ms
     /// (`pipeline/impact.rs`; with fixed substeps, or if the explicit step would take more
     /// than 1000 substeps a step, it keeps the implicit one). A snapshot keeps the step's
-    /// state between steps (`θ`, the energy budget, the impact).
+    /// state between steps (`θ`, the energy ledger, the impact).
     ///
     /// Undamped, at 60 Hz with 2 sweeps, the box of `tests/shared/energy.rs` (E = 10⁴ Pa)
-    /// tumbling at 1.5 rad/s keeps its angular momentum to 10⁻⁵ and its energy within 0.02 %
-    /// over 30 s, where backward Euler loses 20 % and 38 % in 10 s; let go from a 5 % stretch,
-    /// it rings on within 1 % of its energy. A 10 cm ball (E = 10⁵–10⁶ Pa) thrown at a wall at
+    /// tumbling at 1.5 rad/s keeps its angular momentum to 10⁻⁵ and its energy within 10⁻⁵
+    /// over 10 s, where backward Euler loses 20 % and 38 %; let go from a 5 % stretch, it
+    /// rings on within 10⁻⁴ of its energy. A 10 cm ball (E = 10⁵–10⁶ Pa) thrown at a wall at
     /// 2–5 m/s leaves it within 4 % of the explicit 1 ms run's speed (backward Euler: it
     /// sticks), and the `fall` cube's trajectory (edge repulsion, shape matching) is within
     /// 2–5 % of its size of the common reference (backward Euler: 44–48 %), at 3–6× less than
@@ -668,6 +670,7 @@ fn midpoint_pass(body: &mut Deformable, g: Vector, h: Real, iterations: usize) {
         let held = held_nodes(body, h, None);
         implicit_pass(body, g, h, iterations, &held, false, &mut Vec::new());
     }
+    midpoint::record_work(body, h);
 }
 
 /// One implicit solve of `body` over `h` (free nodes from their velocity at the start of the

@@ -140,6 +140,15 @@ impl Resolved {
         })
     }
 
+    /// Whether every element term's damping `c` is zero.
+    pub fn undamped(&self) -> bool {
+        match self.stiffness {
+            Stiffness::FromMaterial => self.material.damping_ratio == 0.0,
+            Stiffness::Raw { c, .. } => c == 0.0,
+            Stiffness::PerMass { damping_ratio, .. } => damping_ratio == 0.0,
+        }
+    }
+
     /// `(k, c)` of one element term, given the material mapping's `k` for it and the mass it
     /// moves.
     #[inline]

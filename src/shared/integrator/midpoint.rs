@@ -18,16 +18,24 @@
 //! changed:
 //! 1. its angular momentum about its centre of mass (gravity exerts no torque there), exactly,
 //!    by a rigid rotation added to its velocities;
-//! 2. its internal energy (kinetic about the centre of mass, plus elastic), never above a
-//!    budget: the energy it had when it was last touched, following the energy down within
-//!    [`SLACK`]. Energy above it is taken out of the velocities relative to the body's rigid
-//!    motion, which changes neither momentum. (The discrete energy of a nonlinear body
-//!    oscillates within a period, ±0.2 % for the soft box of `tests/shared/energy.rs`; the
-//!    peaks that pass the budget are lost: 0.1–0.2 % in 30 s.)
+//! 2. its internal energy (kinetic about the centre of mass, plus elastic), set to what the
+//!    step owes it, through the velocities relative to the body's rigid motion (which changes
+//!    neither momentum; raised by at most [`LIFT`] of that motion's energy a step). Converged,
+//!    the step changes the kinetic energy by exactly the work of the forces at the solve's
+//!    point over the step's motion, `h Σ F(x_θ)·v_θ`: `K` plus the potential that work
+//!    measures is what the midpoint rule conserves. What the kinetic energy changed beyond it
+//!    is the sweeps' error, or the damping's or backward Euler's loss: losses are kept (none
+//!    of an undamped body at `θ = ½`, whose every loss is the sweeps'), a gain only makes up
+//!    earlier losses (within [`SLACK`] of the energy). The step owes the body its energy at
+//!    the start, changed by the losses kept. The body's discrete energy itself
+//!    (a nonlinear body's oscillates about the conserved one, ±0.2 % for the soft box of
+//!    `tests/shared/energy.rs`, and beats over seconds) is set to that, so it neither drifts
+//!    nor beats; what a step cannot set (the relative motion too small) is carried to the
+//!    next.
 //! 3. a step whose carried motion would leave a cell flatter than the solve's line searches
 //!    allow ([`keeps_cells`]) is solved again by backward Euler;
 //! 4. `θ` rises toward backward Euler while the steps diverge: by [`RAISE`] after a step whose
-//!    excess passed [`SPIKE`] of the budget, to 1 when the relative motion held less than the
+//!    energy passed what it was owed by [`SPIKE`] of it, to 1 when the relative motion held less than the
 //!    excess (it lies in the elastic energy, which backward Euler removes); it comes back to
 //!    `½` by [`RELAX`] a step while they do not.
 //!
@@ -39,32 +47,47 @@
 //! E = 10⁵ Pa, from 6.5 J to 11 J in 18 steps after leaving a crease), and backward Euler
 //! settles that ring. So does a body bound to bones
 //! unless it is solved whole (`PipelineSettings::global_iterations`): its bones do work and
-//! exert torques, so it keeps neither momentum nor an energy budget, and only a converged
+//! exert torques, so it keeps neither momentum nor energy of its own, and only a converged
 //! solve keeps its midpoint step stable. Its bound nodes are held where their bones are at
 //! `θ h`.
 
 use super::super::body::Deformable;
 use super::super::math::{self, AngVector, Real, Vector};
-use super::super::model::MIN_STEP_VOLUME;
+use super::super::model::{Accumulator, MIN_STEP_VOLUME};
 
-/// How far above its energy a free body's budget follows it down.
+/// How much of a free body's energy the losses its steps keep may reach before later gains
+/// no longer make them up.
 pub(crate) const SLACK: Real = 0.02;
-/// An excess over a free body's budget, as a share of it (or of its centre's kinetic energy
-/// if that is larger), that marks a diverging step.
+/// An excess over what a free body is owed, as a share of its energy (or of its centre's
+/// kinetic energy if that is larger), that marks a diverging step.
 pub(crate) const SPIKE: Real = 0.01;
 /// How much `θ` rises after a diverging step.
 pub(crate) const RAISE: Real = 0.1;
+/// Most of the energy of a free body's motion relative to its rigid motion that a step may
+/// add to bring its energy up to what it is owed.
+pub(crate) const LIFT: Real = 0.01;
 /// How much `θ` comes down a step, back to `½`, while the steps do not diverge.
 pub(crate) const RELAX: Real = 0.01;
+
+/// How much of its energy a free body is owed, carried between its midpoint steps.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub(crate) struct Ledger {
+    /// What its steps lost beyond the work of its forces that later gains may make up (≤ 0,
+    /// at least `−SLACK` of its energy).
+    loss: Real,
+    /// Its target energy less its energy at the end of its last step: what that step could not
+    /// set through its motion.
+    short: Real,
+}
 
 /// What the midpoint step of one body carries between steps.
 #[derive(Clone, Debug)]
 pub(crate) struct MidpointState {
-    /// `θ` of the next step: `½`, or up to 1 after a step the budget could not hold.
+    /// `θ` of the next step: `½`, or up to 1 after a step whose energy could not be held.
     theta: Real,
-    /// The most internal energy the body may have while nothing touches it (`None` after a
-    /// step in which something did).
-    budget: Option<Real>,
+    /// What its energy is owed (`None` after a step in which something touched it).
+    ledger: Option<Ledger>,
     /// The step under way.
     pending: Option<Pending>,
     /// How long the body stays in the impact it is in (s; zero when in none:
@@ -81,7 +104,7 @@ pub(crate) struct MidpointState {
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct MidpointCarry {
     theta: Real,
-    budget: Option<Real>,
+    ledger: Option<Ledger>,
     impact: Real,
     too_stiff: bool,
 }
@@ -90,7 +113,7 @@ impl Default for MidpointState {
     fn default() -> Self {
         MidpointState {
             theta: 0.5,
-            budget: None,
+            ledger: None,
             pending: None,
             impact: 0.0,
             too_stiff: false,
@@ -99,15 +122,15 @@ impl Default for MidpointState {
 }
 
 impl MidpointState {
-    /// A step not taken by the midpoint rule: the budget starts afresh at the next one.
+    /// A step not taken by the midpoint rule: the ledger starts afresh at the next one.
     pub fn forget(&mut self) {
-        self.budget = None;
+        self.ledger = None;
         self.pending = None;
     }
 
     /// Whether the last step was a midpoint step.
     pub fn in_flight(&self) -> bool {
-        self.budget.is_some()
+        self.ledger.is_some()
     }
 
     /// Whether a midpoint step is under way ([`begin`] to [`finish`]).
@@ -120,23 +143,25 @@ impl MidpointState {
     pub fn carry(&self) -> MidpointCarry {
         MidpointCarry {
             theta: self.theta,
-            budget: self.budget,
+            ledger: self.ledger,
             impact: self.impact,
             too_stiff: self.too_stiff,
         }
     }
 
-    /// The state a snapshot kept, checked: `θ` in `[½, 1]`, a finite budget of at least zero,
+    /// The state a snapshot kept, checked: `θ` in `[½, 1]`, a finite ledger whose losses are at most zero,
     /// an impact of zero to a second.
     #[cfg(feature = "serde")]
     pub fn from_carry(c: MidpointCarry) -> Result<Self, String> {
-        let budget_ok = c.budget.is_none_or(|b| b.is_finite() && b >= 0.0);
-        if !((0.5..=1.0).contains(&c.theta) && budget_ok && (0.0..=1.0).contains(&c.impact)) {
+        let ledger_ok = c
+            .ledger
+            .is_none_or(|l| l.loss.is_finite() && l.loss <= 0.0 && l.short.is_finite());
+        if !((0.5..=1.0).contains(&c.theta) && ledger_ok && (0.0..=1.0).contains(&c.impact)) {
             return Err(format!("midpoint step state out of range: {c:?}"));
         }
         Ok(MidpointState {
             theta: c.theta,
-            budget: c.budget,
+            ledger: c.ledger,
             pending: None,
             impact: c.impact,
             too_stiff: c.too_stiff,
@@ -151,9 +176,12 @@ struct Pending {
     theta: Real,
     /// No bone moves the body: its momentum and energy are its own to keep.
     free: bool,
-    /// The body's internal energy and angular momentum at the start.
+    /// The body's internal energy, its kinetic part and its angular momentum at the start.
     energy: Real,
+    kinetic: Real,
     momentum: AngVector,
+    /// The work of the elastic forces at the solve's point over the step's motion.
+    work: Real,
 }
 
 /// A body's motion about its centre of mass.
@@ -197,15 +225,51 @@ fn internal(body: &Deformable, elastic: Real) -> Internal {
 /// to take.
 pub(crate) fn begin(body: &mut Deformable) -> Real {
     let theta = body.step.midpoint.theta;
-    let start = internal(body, body.elastic_energy());
+    let elastic = body.elastic_energy();
+    let start = internal(body, elastic);
     body.step.midpoint.pending = Some(Pending {
         v0: body.state.velocities.clone(),
         theta,
         free: body.bindings.len() == 0,
         energy: start.energy,
+        kinetic: start.energy - elastic,
         momentum: start.momentum,
+        work: 0.0,
     });
     theta
+}
+
+/// Records the work of the elastic forces over the step under way, once its solve left the
+/// velocities `v_θ` at the start positions: `h Σ F(x_θ)·v_θ`.
+pub(crate) fn record_work(body: &mut Deformable, h: Real) {
+    let Some(theta) = body
+        .step
+        .midpoint
+        .pending
+        .as_ref()
+        .filter(|p| p.free)
+        .map(|p| p.theta)
+    else {
+        return;
+    };
+    let (x0, v) = (&body.state.positions, &body.state.velocities);
+    let q: Vec<Vector> = x0
+        .iter()
+        .zip(v)
+        .map(|(x, v)| *x + *v * (theta * h))
+        .collect();
+    let mut acc = Accumulator::new(q.len());
+    let still = vec![Vector::ZERO; q.len()];
+    body.state.elements.accumulate(&q, &still, &mut acc);
+    let work: Real = acc
+        .force
+        .iter()
+        .zip(&body.state.velocities)
+        .map(|(f, v)| f.dot(*v))
+        .sum();
+    if let Some(p) = &mut body.step.midpoint.pending {
+        p.work = h * work;
+    }
 }
 
 /// Makes the step under way backward Euler (`θ = 1`), for the solve to be taken again.
@@ -238,7 +302,7 @@ pub(crate) fn keeps_cells(body: &Deformable, h: Real, theta: Real) -> bool {
 
 /// Ends a midpoint step after the positions moved by `h v_θ`: the end velocities, then, for a
 /// free body, its angular momentum and energy kept (see the module docs). After a step
-/// [`begin`] did not start (another integrator's), the budget starts afresh.
+/// [`begin`] did not start (another integrator's), the ledger starts afresh.
 pub(crate) fn finish(body: &mut Deformable) {
     let Some(pending) = body.step.midpoint.pending.take() else {
         body.step.midpoint.forget();
@@ -251,12 +315,11 @@ pub(crate) fn finish(body: &mut Deformable) {
     body.state.elements.refit_rotations(&body.state.positions);
     if !pending.free {
         // Its bones do work and exert torques: nothing of its own to keep.
-        body.step.midpoint.budget = None;
+        body.step.midpoint.ledger = None;
         return;
     }
     let (energy, momentum) = (pending.energy, pending.momentum);
     let masses = &body.rest.masses;
-    // The clip below changes only velocities: one evaluation of the elastic energy serves.
     let elastic = body.elastic_energy();
     let now = internal(body, elastic);
     let turn = math::angular_velocity_for(&now.offsets, masses, momentum - now.momentum);
@@ -264,47 +327,58 @@ pub(crate) fn finish(body: &mut Deformable) {
         *v += math::ang_cross(turn, *r);
     }
     let now = internal(body, elastic);
+    let undamped = body.rest.params.undamped() && body.deformation_damping() == 0.0;
+    let theta_half = pending.theta == 0.5;
     let state = &mut body.step.midpoint;
-    // Energy given between the steps (an impulse) raises the budget.
-    let budget = state.budget.map_or(energy, |b| b.max(energy));
-    let excess = now.energy - budget;
+    let carried = state.ledger.unwrap_or_default();
+    // What the step changed beyond the work of the body's forces (the solve's error, and the
+    // damping's and backward Euler's losses): losses are kept, gains only up to earlier losses
+    // (within `SLACK` of the energy).
+    let injected = (now.energy - elastic) - pending.kinetic - pending.work;
+    // Undamped at `θ = ½`, every loss is the sweeps': none is kept.
+    let kept = if undamped && theta_half {
+        0.0
+    } else {
+        injected.min(-carried.loss)
+    };
+    let loss = (carried.loss + kept).max(-SLACK * energy);
+    let target = energy + carried.short + kept;
     let mut theta = (state.theta - RELAX).max(0.5);
-    let mut end = now.energy;
-    if excess > 0.0 {
-        let spin = math::angular_velocity_for(&now.offsets, masses, now.momentum);
-        let rigid = |r: Vector| now.centre_velocity + math::ang_cross(spin, r);
-        let relative: Real = body
-            .state
-            .velocities
-            .iter()
-            .zip(&now.offsets)
-            .zip(masses)
-            .map(|((v, r), m)| 0.5 * m * (*v - rigid(*r)).length_squared())
-            .sum();
-        let removed = excess.min(relative);
-        let scale = if relative > 0.0 {
-            (1.0 - removed / relative).max(0.0).sqrt()
-        } else {
-            1.0
-        };
+    let spin = math::angular_velocity_for(&now.offsets, masses, now.momentum);
+    let rigid = |r: Vector| now.centre_velocity + math::ang_cross(spin, r);
+    let relative: Real = body
+        .state
+        .velocities
+        .iter()
+        .zip(&now.offsets)
+        .zip(masses)
+        .map(|((v, r), m)| 0.5 * m * (*v - rigid(*r)).length_squared())
+        .sum();
+    let excess = now.energy - target;
+    // The energy is set to the target through the motion relative to the rigid one, which
+    // changes neither momentum; raised by at most `LIFT` of that motion's energy.
+    let change = excess.min(relative).max(-LIFT * relative);
+    if change != 0.0 && relative > 0.0 {
+        let scale = (1.0 - change / relative).max(0.0).sqrt();
         for (v, r) in body.state.velocities.iter_mut().zip(&now.offsets) {
             let w = rigid(*r);
             *v = w + (*v - w) * scale;
         }
-        end -= removed;
-        // Rounding makes a tiny excess, even of a body moving rigidly (its internal energy
-        // about zero: an edge-repulsion box at rest reads ±4·10⁻⁵ J): only one above `SPIKE`
-        // of the budget or of the centre's kinetic energy marks a diverging step. (The excess
-        // itself is taken out whatever its size.)
-        let centre = 0.5 * masses.iter().sum::<Real>() * now.centre_velocity.length_squared();
-        let tolerance = SPIKE * budget.max(centre);
-        if excess - relative > tolerance {
-            theta = 1.0;
-        } else if excess > tolerance {
-            theta = (body.step.midpoint.theta + RAISE).min(1.0);
-        }
+    }
+    // Rounding makes a tiny excess, even of a body moving rigidly (its internal energy about
+    // zero: an edge-repulsion box at rest reads ±4·10⁻⁵ J): only one above `SPIKE` of the
+    // energy or of the centre's kinetic energy marks a diverging step.
+    let centre = 0.5 * masses.iter().sum::<Real>() * now.centre_velocity.length_squared();
+    let tolerance = SPIKE * energy.max(centre);
+    if excess - relative > tolerance {
+        theta = 1.0;
+    } else if excess > tolerance {
+        theta = (body.step.midpoint.theta + RAISE).min(1.0);
     }
     let state = &mut body.step.midpoint;
-    state.budget = Some(budget.min(end.max(0.0) * (1.0 + SLACK)));
+    state.ledger = Some(Ledger {
+        loss,
+        short: target - (now.energy - change),
+    });
     state.theta = theta;
 }
