@@ -336,6 +336,7 @@ fn step_together(
             set: &set,
             reactions: &reactions,
             carried,
+            gravity: None,
         };
         let own = substep_at(ctx, m.sc.broad.skin, at.h, at.t, &motions[i]);
         answered(m, &own, bodies, given);
@@ -757,6 +758,7 @@ fn advance(
             set: &set,
             reactions: &reactions,
             carried: &carried,
+            gravity: Some(g * at.h),
         };
         answered(m, at, bodies, given);
     }
@@ -850,7 +852,20 @@ fn answered(m: &mut Member<'_, '_>, at: &Substep<'_>, bodies: &mut RigidBodySet,
     if candidates.is_empty() {
         return;
     }
-    given.pass_on(body, at, (candidates, &m.rigid_rows), bodies);
+    let unpaid = given.pass_on(body, at, (candidates, &m.rigid_rows), bodies);
+    // Only a body that meets nothing but dynamic bodies keeps its momentum with them: one
+    // that a fixed or moving collider holds too answers through it (its sweeps and holds
+    // lean on it).
+    let free = candidates.iter().all(|c| c.dynamic) && body.bindings.len() == 0;
+    if let (Some(gravity), true) = (given.gravity, free) {
+        let centre = body.center_of_mass();
+        let (mut impulse, mut moment) = unanswered(body, centre, at.h, (given.reactions, gravity));
+        for (anchor, j) in &unpaid {
+            impulse += *j;
+            moment += math::cross(*anchor - centre, *j);
+        }
+        take_back(body, centre, (impulse, moment));
+    }
     let sharing = Sharing {
         split: !m.shares_bodies,
         defer: false,
@@ -927,6 +942,10 @@ struct Given<'a> {
     reactions: &'a [Vector],
     /// What the contacts with dynamic bodies gave their nodes to carry.
     carried: &'a Carried,
+    /// What gravity gave each node over the substep (velocity), when the body was solved
+    /// alone (`None` in an island, whose contacts between its members move momentum among
+    /// them).
+    gravity: Option<Vector>,
 }
 
 impl Given<'_> {
@@ -937,15 +956,20 @@ impl Given<'_> {
     /// pushes are scaled down together until none sends the body away from its contact faster
     /// than the deformable side goes there (each capped on its own, in turn, rocked a box
     /// resting on four nodes; uncapped, a light box was launched).
+    ///
+    /// Returns what the nodes got that no body paid (a push scaled down, a hold's pull on its
+    /// node, which a contact cannot exert, or its push along the contact), as impulses at the
+    /// contacts' anchors.
     fn pass_on(
         &self,
         body: &Deformable,
         at: &Substep<'_>,
         (candidates, rows): (&Candidates<'_>, &[Contact]),
         bodies: &mut RigidBodySet,
-    ) {
+    ) -> Vec<(Vector, Vector)> {
+        let mut unpaid = Vec::new();
         if self.reactions.is_empty() {
-            return;
+            return unpaid;
         }
         let v = &body.state.velocities;
         // Per push: its row, its body, its impulse along the normal, how fast it closes.
@@ -955,14 +979,18 @@ impl Given<'_> {
             let Some(handle) = cand.rigid(at.motions).filter(|_| *share > 0.0) else {
                 continue;
             };
-            let rest: Real = r
+            let whole: Vector = r
                 .moving_nodes()
                 .map(|(i, w)| {
                     let part = share * w / self.carried.nodes[i];
                     let given = (self.set[i] - self.before[i]) * body.rest.masses[i];
-                    part * r.normal.dot(self.reactions[i] * at.h - given)
+                    (self.reactions[i] * at.h - given) * part
                 })
                 .sum();
+            let rest = r.normal.dot(whole);
+            // Only the push along the normal is passed on: the rest of what the hold gave is
+            // unpaid (its tangential part, or all of a pull).
+            unpaid.push((r.anchor(), whole - r.normal * rest.max(0.0)));
             if rest > 0.0 {
                 let anchor = r.anchor();
                 let moving =
@@ -1020,8 +1048,51 @@ impl Given<'_> {
                     let impulse = -r.normal * (scale * rest);
                     cand.apply_impulse(impulse, r.anchor(), at.motions, bodies, at.dt);
                 }
+                if scale < 1.0 {
+                    unpaid.push((r.anchor(), r.normal * ((1.0 - scale) * rest)));
+                }
             }
         }
+        unpaid
+    }
+}
+
+/// What the implicit solve changed of `body`'s momentum (about `centre`) beyond its holds'
+/// reactions and gravity: unconverged sweeps leave the free nodes' equations unbalanced, and
+/// with nodes held the body does not move as a whole by its best translation, which would
+/// keep it.
+fn unanswered(
+    body: &Deformable,
+    centre: Vector,
+    h: Real,
+    (reactions, gravity): (&[Vector], Vector),
+) -> (Vector, AngVector) {
+    let (x, v, v0) = (
+        &body.state.positions,
+        &body.state.velocities,
+        &body.step.scratch_velocities,
+    );
+    let (mut p, mut l) = (Vector::ZERO, AngVector::default());
+    for i in 0..x.len() {
+        let held = reactions.get(i).copied().unwrap_or(Vector::ZERO) * h;
+        let j = (v[i] - v0[i] - gravity) * body.rest.masses[i] - held;
+        p += j;
+        l += math::cross(x[i] - centre, j);
+    }
+    (p, l)
+}
+
+/// Takes back from `body` an impulse and a moment about its `centre` that no body gave it
+/// (what its contacts' holds gave it unpaid, [`Given::pass_on`], and what its sweeps made,
+/// [`unanswered`]), as a rigid body of its masses would, so that the body and the bodies it
+/// touches keep their momenta: a box thrown at a free soft cube under the implicit step had
+/// lost half of the pair's momentum over the hit.
+fn take_back(body: &mut Deformable, centre: Vector, (impulse, moment): (Vector, AngVector)) {
+    let offsets: Vec<Vector> = body.state.positions.iter().map(|x| *x - centre).collect();
+    let turn = math::angular_velocity_for(&offsets, &body.rest.masses, -moment);
+    let shift = -impulse / body.total_mass();
+    for (v, r) in body.state.velocities.iter_mut().zip(&offsets) {
+        *v += shift + math::ang_cross(turn, *r);
     }
 }
 
