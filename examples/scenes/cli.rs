@@ -138,7 +138,7 @@ pub struct Args {
     #[arg(long)]
     pub strikes: Option<usize>,
     /// sinew's integrator (every scene but rotation-error, squeeze, fold and advise; default:
-    /// explicit).
+    /// explicit, but for ball sinew's own default, auto with 2 sweeps).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,
     /// Gauss–Seidel sweeps per step of the implicit integrator (default 10). (`--iterations`
@@ -862,7 +862,11 @@ macro_rules! dimension_runner {
                                 seconds: args.seconds.map_or(d.seconds, |v| v as Real),
                                 young_modulus: args.young.map_or(d.young_modulus, |v| v as Real),
                                 poisson_ratio: args.poisson.map_or(d.poisson_ratio, |v| v as Real),
-                                integrator: cube.integrator,
+                                integrator: if args.integrator.is_some() {
+                                    cube.integrator
+                                } else {
+                                    d.integrator
+                                },
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]

@@ -152,16 +152,15 @@ impl Integrate for SymplecticEuler {
 
 /// Which integrator steps the deformables ([`PipelineSettings::integrator`](super::PipelineSettings::integrator)).
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Default)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum Integrator {
-    /// Symplectic Euler in substeps under the stability bound, the papers' integrator (the
-    /// default). Undamped free motion keeps its energy: the reported energy oscillates about
+    /// Symplectic Euler in substeps under the stability bound, the papers' integrator, which
+    /// [`Integrator::Auto`] (the default) takes wherever it is cheap. Undamped free motion keeps its energy: the reported energy oscillates about
     /// a constant by O(h·ω) (5–14 % for a 5 % free vibration at the automatic substep of a
     /// 60 Hz step, 1 % at h = 1/600 s), with no trend beyond 0.05 % in 10 s at h = 1/600 s
     /// for any model (`tests/shared/energy.rs`). At the automatic substep nonlinear
     /// springs, which stiffen as they shorten, can gain: +3.7 % in 10 s for that vibration;
     /// lower [`PipelineSettings::safety`](super::PipelineSettings::safety) there.
-    #[default]
     Explicit,
     /// Backward Euler by Vertex Block Descent: one substep per step, `iterations` Gauss–Seidel
     /// sweeps of per-node Newton steps (the cost knob; `docs/ARCHITECTURE.md` §4.2). A body
@@ -234,10 +233,22 @@ pub enum Integrator {
     /// or finely meshed body at a game's frame rate). The choice follows the body's calibrated
     /// stable substep at rest and the step length, so it changes only with `dt`; the report
     /// says which ran ([`DeformableReport::implicit`](super::DeformableReport::implicit)).
+    ///
+    /// The default, with 2 sweeps: at 1 ms a soft body steps explicitly as it always did,
+    /// and at a game's 60 Hz the 10 cm silicone ball of `scenes ball` (823 nodes, E = 1 MPa,
+    /// 103 explicit substeps a step) lands and rests in 3.4 ms a step with edge repulsion,
+    /// against 16 ms explicitly.
     Auto {
         /// Sweeps per implicit step.
         iterations: usize,
     },
+}
+
+impl Default for Integrator {
+    /// [`Integrator::Auto`] with 2 sweeps.
+    fn default() -> Self {
+        Integrator::Auto { iterations: 2 }
+    }
 }
 
 /// Explicit substeps a step above which [`Integrator::Auto`] takes the implicit step. An

@@ -103,3 +103,21 @@ fn the_report_says_which_step_auto_took() {
     assert!(!soft, "the soft cube at 1 ms stepped implicitly");
     assert!(soft_substeps >= 1);
 }
+
+#[test]
+fn the_default_integrator_is_auto_and_a_new_world_runs_it() {
+    // A new user's world and the ball scene take it: the stiff ball at 60 Hz then takes few
+    // substeps a step (the explicit step: ~95) and turns no cell inside out.
+    assert_eq!(Integrator::default(), AUTO);
+    assert_eq!(DeformableWorld::new().pipeline.settings.integrator, AUTO);
+    let ball = BallScene::default();
+    assert_eq!(ball.integrator, AUTO);
+    let r = BallScene {
+        seconds: 1.0,
+        ..ball
+    }
+    .run()
+    .unwrap();
+    assert!(r.substeps < 40.0, "{} substeps a step", r.substeps);
+    assert_eq!(r.max_inverted_elements, 0);
+}

@@ -105,7 +105,7 @@ pub struct PipelineSettings {
     /// A body still this long (s), with no bone it is bound to moving and no moving or awake
     /// dynamic body near it, falls asleep (default 0.5 s, rapier 0.36's `time_until_sleep`).
     pub time_until_sleep: Real,
-    /// How the bodies' velocities advance (default [`Integrator::Explicit`]).
+    /// How the bodies' velocities advance (default [`Integrator::Auto`] with 2 sweeps).
     #[cfg_attr(feature = "serde", serde(default))]
     pub integrator: Integrator,
     /// A fixed or kinematic bone that would drag a bound node faster than this (m/s) jumped (a
@@ -162,7 +162,7 @@ impl Default for PipelineSettings {
             max_stretch: 10.0,
             sleep_speed: 0.05,
             time_until_sleep: 0.5,
-            integrator: Integrator::Explicit,
+            integrator: Integrator::default(),
             teleport_speed: 50.0,
             global_iterations: None,
             damp_held: true,

@@ -49,7 +49,7 @@ pub struct BallScene {
 impl Default for BallScene {
     /// Radius 10 cm, 2 cm cells (823 nodes in 3D), E = 10⁶ Pa, ν = 0.3, ρ = 1100 kg/m³,
     /// damping ratio 0.1, bottom 0.5 m up, friction 0.5, restitution 0.5, dt 1/60 s, 3 s, edge
-    /// repulsion.
+    /// repulsion, sinew's default integrator (what a new user runs).
     fn default() -> Self {
         BallScene {
             subject: Subject::Sinew(ElementModel::EdgeRepulsion),
@@ -64,7 +64,7 @@ impl Default for BallScene {
             restitution: 0.5,
             dt: 1.0 / 60.0,
             seconds: 3.0,
-            integrator: Integrator::Explicit,
+            integrator: Integrator::default(),
         }
     }
 }
