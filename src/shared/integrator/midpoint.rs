@@ -252,12 +252,7 @@ pub(crate) fn record_work(body: &mut Deformable, h: Real) {
     else {
         return;
     };
-    let (x0, v) = (&body.state.positions, &body.state.velocities);
-    let q: Vec<Vector> = x0
-        .iter()
-        .zip(v)
-        .map(|(x, v)| *x + *v * (theta * h))
-        .collect();
+    let q = carried(body, theta * h);
     let mut acc = Accumulator::new(q.len());
     let still = vec![Vector::ZERO; q.len()];
     body.state.elements.accumulate(&q, &still, &mut acc);
@@ -281,18 +276,18 @@ pub(crate) fn as_backward_euler(body: &mut Deformable) {
     }
 }
 
+/// `body`'s positions carried on by its velocities for `t`.
+fn carried(body: &Deformable, t: Real) -> Vec<Vector> {
+    let (x0, v) = (&body.state.positions, &body.state.velocities);
+    x0.iter().zip(v).map(|(x, v)| *x + *v * t).collect()
+}
+
 /// Whether carrying the solve's motion (the velocities, `v_θ`) on to the step's end keeps
 /// every cell of `body` no flatter than [`MIN_STEP_VOLUME`] of its rest volume, or than the
 /// solve left it: the solve's line searches keep `x_θ` upright, but `x₀ + h v_θ` goes
 /// `1/θ` times as far (a soft box let go from half its length turned cells inside out).
 pub(crate) fn keeps_cells(body: &Deformable, h: Real, theta: Real) -> bool {
-    let (x0, v) = (&body.state.positions, &body.state.velocities);
-    let mid: Vec<Vector> = x0
-        .iter()
-        .zip(v)
-        .map(|(x, v)| *x + *v * (theta * h))
-        .collect();
-    let end: Vec<Vector> = x0.iter().zip(v).map(|(x, v)| *x + *v * h).collect();
+    let (mid, end) = (carried(body, theta * h), carried(body, h));
     let mesh = &body.rest.mesh;
     (0..mesh.num_cells()).all(|c| {
         let q = mesh.cell_quality(c, &end);
