@@ -447,9 +447,7 @@ fn cell_terms(
 
 #[cfg(test)]
 mod tests {
-    use super::super::super::body::DeformableBuilder;
-    use super::super::super::mesh::CellKind;
-    use super::super::{Accumulator, ElementModel, Elements};
+    use super::super::Accumulator;
     use super::*;
 
     #[test]
@@ -457,14 +455,8 @@ mod tests {
         // A squashed, sheared lattice: moving one node changes the repulsions' energy by the
         // work of their force on it.
         let half = Vector::splat(0.05);
-        let body = DeformableBuilder::cuboid(half, [3; math::DIM])
-            .cells(CellKind::Simplex)
-            .model(ElementModel::EdgeRepulsion)
-            .build()
-            .unwrap();
-        let Elements::EdgeRepulsion(er) = &body.state.elements.elements else {
-            unreachable!()
-        };
+        let body = super::super::fixtures::er_lattice(half, [3; math::DIM]);
+        let er = super::super::fixtures::er_of(&body);
         let x = super::super::squashed(&body.state.positions, 0.7, 0.4);
         let n = x.len();
         let cells = 0..er.sign.len();
@@ -519,14 +511,8 @@ mod tests {
         half[0] = 0.5;
         let mut res = [3; math::DIM];
         res[0] = 21;
-        let body = DeformableBuilder::cuboid(half, res)
-            .cells(CellKind::Simplex)
-            .model(ElementModel::EdgeRepulsion)
-            .build()
-            .unwrap();
-        let Elements::EdgeRepulsion(er) = &body.state.elements.elements else {
-            unreachable!()
-        };
+        let body = super::super::fixtures::er_lattice(half, res);
+        let er = super::super::fixtures::er_of(&body);
         let x = super::super::squashed(&body.state.positions, 0.6, 3.0);
         let v: Vec<Vector> = x.iter().map(|p| -*p * 2.0).collect();
         let n = x.len();

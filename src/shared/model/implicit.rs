@@ -1411,7 +1411,6 @@ fn invert(m: Matrix) -> Option<Matrix> {
 mod tests {
     use super::super::super::body::DeformableBuilder;
     use super::super::super::math::FACET_ARITY;
-    use super::super::super::mesh::CellKind;
     use super::super::edge_repulsion::{repulsion, OPPOSITE};
     use super::super::ElementModel;
     use super::*;
@@ -1455,14 +1454,8 @@ mod tests {
         // A lattice squashed to 60 % of its height and sheared, so the barriers are loaded and
         // the feet fall off-centre: the per-vertex terms from one evaluation of the cell must
         // equal the four repulsions (and their finite-difference-tested blocks) evaluated apart.
-        let body = DeformableBuilder::cuboid(Vector::splat(0.5), [4; math::DIM])
-            .cells(CellKind::Simplex)
-            .model(ElementModel::EdgeRepulsion)
-            .build()
-            .unwrap();
-        let Elements::EdgeRepulsion(er) = &body.state.elements.elements else {
-            unreachable!()
-        };
+        let body = super::super::fixtures::er_lattice(Vector::splat(0.5), [4; math::DIM]);
+        let er = super::super::fixtures::er_of(&body);
         let x = super::super::squashed(&body.state.positions, 0.6, 0.3);
         let mut loaded = 0;
         for cell in 0..er.cells.len() / SIMPLEX_ARITY {
@@ -1505,16 +1498,10 @@ mod tests {
     fn with_squashed_er(
         check: impl FnOnce(&EdgeRepulsion, Option<&Volume>, &Incidence, &[Vector]),
     ) {
-        let body = DeformableBuilder::cuboid(Vector::splat(0.05), [4; math::DIM])
-            .cells(CellKind::Simplex)
-            .model(ElementModel::EdgeRepulsion)
-            .build()
-            .unwrap();
+        let body = super::super::fixtures::er_lattice(Vector::splat(0.05), [4; math::DIM]);
         let x = super::super::squashed(&body.state.positions, 0.5, 0.6);
         let elements = &body.state.elements;
-        let Elements::EdgeRepulsion(er) = &elements.elements else {
-            unreachable!()
-        };
+        let er = super::super::fixtures::er_of(&body);
         let volume = elements.volume.as_ref();
         let incidence = Incidence::of(&elements.elements, volume, x.len()).unwrap();
         check(er, volume, &incidence, &x);

@@ -51,6 +51,8 @@
 
 pub mod centroid_springs;
 pub mod edge_repulsion;
+#[cfg(test)]
+mod fixtures;
 pub mod hessian;
 mod implicit;
 mod lanes;
