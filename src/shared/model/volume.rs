@@ -10,7 +10,7 @@
 //! block out then (its gradient is exact either way).
 
 use super::super::math::{self, Matrix, Real, Vector, DIM, DIM_FACTORIAL, SIMPLEX_ARITY};
-use super::lanes::{each, Lane, LaneVector, LANES};
+use super::lanes::{self, each, Lane, LaneVector, LANES};
 use super::Accumulator;
 
 /// The scale `σ` of a model's own terms and the volumetric modulus `κ` (over `E`) that give a
@@ -76,60 +76,35 @@ impl Volume {
         &self.cells
     }
 
-    /// Cell `cell` at `x`: `J − 1`, the gradients of `D`, and `κ V0 / D0`.
-    #[inline]
-    fn at(&self, cell: usize, x: &[Vector]) -> (Real, [Vector; SIMPLEX_ARITY], Real) {
-        let ids = &self.cells[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
-        let p: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| x[ids[a] as usize]);
-        let (d, g) = math::simplex_gradients(&p);
-        let d0 = self.d0[cell];
-        (d / d0 - 1.0, g, self.k[cell] / d0)
-    }
-
     /// Adds the forces and their stiffness bounds (`|κ| V0 |g_a| Σ_b |g_b| / D0²`, the
-    /// Gershgorin row of `κ V0 ∇J ∇Jᵀ`).
+    /// Gershgorin row of `κ V0 ∇J ∇Jᵀ`), [`LANES`] cells at a time.
     pub fn accumulate(&self, x: &[Vector], acc: &mut Accumulator) {
-        for (cell, ids) in self.cells.as_chunks::<SIMPLEX_ARITY>().0.iter().enumerate() {
-            let p = std::array::from_fn(|a| x[ids[a] as usize]);
-            let (force, row) = self.cell_terms(cell, &p);
-            for (a, &i) in ids.iter().enumerate() {
-                acc.force[i as usize] += force[a];
-                acc.stiffness[i as usize] += row[a];
+        let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
+        let n = x.len();
+        let (force, stiffness) = (&mut acc.force[..n], &mut acc.stiffness[..n]);
+        let count = ids.len();
+        for first in (0..count).step_by(LANES) {
+            // The last batch repeats its last cell in the lanes past the end.
+            let batch: [usize; LANES] = each(|l| (first + l).min(count - 1));
+            let p: [LaneVector; SIMPLEX_ARITY] =
+                each(|a| LaneVector::gather(|l| x[ids[batch[l]][a] as usize]));
+            let (d, g) = lanes::simplex_gradients(&p);
+            let length: [Lane; SIMPLEX_ARITY] = each(|a| g[a].length_squared().sqrt());
+            let (f, row) = self.cell_lanes(batch, d, &g, &length);
+            let f: [[Vector; LANES]; SIMPLEX_ARITY] = each(|a| f[a].lanes());
+            let row: [[Real; LANES]; SIMPLEX_ARITY] = each(|a| row[a].to_array());
+            for l in 0..LANES.min(count - first) {
+                for a in 0..SIMPLEX_ARITY {
+                    let i = ids[first + l][a] as usize;
+                    force[i] += f[a][l];
+                    stiffness[i] += row[a][l];
+                }
             }
         }
     }
 
-    /// Cell `cell`, its vertices at `p`: the force on each vertex and its stiffness bound.
-    #[inline(always)]
-    pub fn cell_terms(
-        &self,
-        cell: usize,
-        p: &[Vector; SIMPLEX_ARITY],
-    ) -> ([Vector; SIMPLEX_ARITY], [Real; SIMPLEX_ARITY]) {
-        let (d, g) = math::simplex_gradients(p);
-        self.cell_terms_at(cell, d, &g)
-    }
-
-    /// [`Volume::cell_terms`] from the cell's `D` and its gradients, already evaluated.
-    #[inline(always)]
-    pub fn cell_terms_at(
-        &self,
-        cell: usize,
-        d: Real,
-        g: &[Vector; SIMPLEX_ARITY],
-    ) -> ([Vector; SIMPLEX_ARITY], [Real; SIMPLEX_ARITY]) {
-        let d0 = self.d0[cell];
-        let (strain, k) = (d / d0 - 1.0, self.k[cell] / d0);
-        let length: [Real; SIMPLEX_ARITY] = std::array::from_fn(|a| g[a].length());
-        let row = (k / d0).abs() * length.iter().sum::<Real>();
-        (
-            std::array::from_fn(|a| -(g[a] * (k * strain))),
-            std::array::from_fn(|a| row * length[a]),
-        )
-    }
-
-    /// [`Volume::cell_terms_at`] of [`LANES`] cells `cells`, from their `D`, its gradients and
-    /// their lengths.
+    /// [`LANES`] cells `cells`, from their `D`, its gradients and their lengths: the force on
+    /// each vertex and its stiffness bound.
     #[inline(always)]
     pub fn cell_lanes(
         &self,
@@ -205,13 +180,26 @@ impl Volume {
     }
 
     /// The elastic energy of cells `cells`.
+    /// [`LANES`] cells at a time.
     pub fn energy_of(&self, x: &[Vector], cells: std::ops::Range<usize>) -> Real {
-        cells
-            .map(|cell| {
-                let (strain, _, k) = self.at(cell, x);
-                0.5 * k * self.d0[cell] * strain * strain
-            })
-            .sum()
+        let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
+        let lane_index = Lane::new(each(|l| l as Real));
+        let mut e = Lane::ZERO;
+        for first in cells.clone().step_by(LANES) {
+            // The last batch repeats its last cell in the lanes past the end, and counts it
+            // once.
+            let batch: [usize; LANES] = each(|l| (first + l).min(cells.end - 1));
+            let counted = lane_index.simd_lt(Lane::splat((cells.end - first) as Real));
+            let p: [LaneVector; SIMPLEX_ARITY] =
+                each(|a| LaneVector::gather(|l| x[ids[batch[l]][a] as usize]));
+            // `D` alone: the optimiser drops the gradients.
+            let (d, _) = lanes::simplex_gradients(&p);
+            let d0 = Lane::new(each(|l| self.d0[batch[l]]));
+            let k = Lane::new(each(|l| self.k[batch[l]]));
+            let strain = d / d0 - Lane::ONE;
+            e += counted.select(Lane::splat(0.5) * k * strain * strain, Lane::ZERO);
+        }
+        e.reduce_add()
     }
 }
 
