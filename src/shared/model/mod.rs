@@ -435,6 +435,26 @@ impl ModelState {
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
         elastic_energy(&self.elements, self.volume.as_ref(), x)
     }
+
+    /// [`ModelState::elastic_energy`] at `x` (the same bits), with the cells' volume ratios
+    /// from the volumetric term's pass when the model has one (`None` without).
+    pub fn elastic_energy_and_ratios(&self, x: &[Vector]) -> (Real, Option<volume::Ratios>) {
+        let Some(v) = &self.volume else {
+            return (self.elastic_energy(x), None);
+        };
+        let none = volume::Ratios {
+            inverted: 0,
+            least: Real::INFINITY,
+            most: -Real::INFINITY,
+        };
+        let (energy, ratios) = super::threads::chunked_fold(
+            v.cells().len() / SIMPLEX_ARITY,
+            |cells| v.energy_and_ratios(x, cells),
+            |(e1, r1), (e2, r2)| (e1 + e2, r1.and(r2)),
+        )
+        .unwrap_or((0.0, none));
+        (energy + elements_energy(&self.elements, x), Some(ratios))
+    }
 }
 
 /// `x` squashed to `height` of its height and sheared by `shear` along the first axis (test
@@ -458,7 +478,13 @@ fn elastic_energy(elements: &Elements, volume: Option<&volume::Volume>, x: &[Vec
     use super::threads::chunked_sum;
     volume.map_or(0.0, |v| {
         chunked_sum(v.cells().len() / SIMPLEX_ARITY, |r| v.energy_of(x, r))
-    }) + match elements {
+    }) + elements_energy(elements, x)
+}
+
+/// Elastic (stored) energy of `elements` at `x`, without the volumetric term.
+fn elements_energy(elements: &Elements, x: &[Vector]) -> Real {
+    use super::threads::chunked_sum;
+    match elements {
         Elements::Springs(s) | Elements::NonlinearSprings(s) => {
             chunked_sum(s.pairs.len(), |r| s.energy_of(x, r))
         }

@@ -180,11 +180,21 @@ impl Volume {
     }
 
     /// The elastic energy of cells `cells`.
-    /// [`LANES`] cells at a time.
     pub fn energy_of(&self, x: &[Vector], cells: std::ops::Range<usize>) -> Real {
+        self.energy_and_ratios(x, cells).0
+    }
+
+    /// The elastic energy of cells `cells` and their volume ratios, one pass [`LANES`] cells
+    /// at a time. A ratio is `(D/DIM!) / (D0/DIM!)`, which rounds as [`Mesh::cell_quality`]
+    /// (whose rest volume is `D0/DIM!`).
+    ///
+    /// [`Mesh::cell_quality`]: super::super::mesh::Mesh::cell_quality
+    pub fn energy_and_ratios(&self, x: &[Vector], cells: std::ops::Range<usize>) -> (Real, Ratios) {
         let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
         let lane_index = Lane::new(each(|l| l as Real));
-        let mut e = Lane::ZERO;
+        let factorial = Lane::splat(DIM_FACTORIAL);
+        let (mut e, mut inverted) = (Lane::ZERO, 0);
+        let (mut least, mut most) = (Lane::splat(Real::INFINITY), Lane::splat(-Real::INFINITY));
         for first in cells.clone().step_by(LANES) {
             // The last batch repeats its last cell in the lanes past the end, and counts it
             // once.
@@ -198,8 +208,41 @@ impl Volume {
             let k = Lane::new(each(|l| self.k[batch[l]]));
             let strain = d / d0 - Lane::ONE;
             e += counted.select(Lane::splat(0.5) * k * strain * strain, Lane::ZERO);
+            let ratio = (d / factorial) / (d0 / factorial);
+            inverted += (ratio.simd_le(Lane::ZERO) & counted)
+                .to_bitmask()
+                .count_ones() as usize;
+            least = least.min(counted.select(ratio, Lane::splat(Real::INFINITY)));
+            most = most.max(counted.select(ratio, Lane::splat(-Real::INFINITY)));
         }
-        e.reduce_add()
+        let ratios = Ratios {
+            inverted,
+            least: least.to_array().into_iter().fold(Real::INFINITY, Real::min),
+            most: most.to_array().into_iter().fold(-Real::INFINITY, Real::max),
+        };
+        (e.reduce_add(), ratios)
+    }
+}
+
+/// The volume ratios `V/V0` of some cells.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct Ratios {
+    /// Cells collapsed or inverted (ratio ≤ 0).
+    pub inverted: usize,
+    /// The smallest ratio (infinite for no cell).
+    pub least: Real,
+    /// The largest ratio (minus infinity for no cell).
+    pub most: Real,
+}
+
+impl Ratios {
+    /// Those of the cells of both.
+    pub fn and(self, o: Ratios) -> Ratios {
+        Ratios {
+            inverted: self.inverted + o.inverted,
+            least: self.least.min(o.least),
+            most: self.most.max(o.most),
+        }
     }
 }
 
@@ -226,6 +269,46 @@ mod tests {
             assert!((s * a11 + k - b11).abs() < 1e-4 * b11, "{lattice} {nu}");
             assert!((s * a12 + k - b12).abs() < 1e-4 * b11, "{lattice} {nu}");
         }
+    }
+
+    #[test]
+    fn the_energy_pass_measures_each_cells_ratio_as_the_mesh_does() {
+        use super::super::super::mesh::{CellKind, Mesh};
+        let mesh = Mesh::cuboid(Vector::splat(0.5), [5; DIM], CellKind::Simplex).unwrap();
+        let v = Volume::build(mesh.cell_indices(), mesh.nodes(), 2.0);
+        // One half squashed, the other folded through itself (inverted cells), sheared.
+        let x: Vec<Vector> = mesh
+            .nodes()
+            .iter()
+            .map(|p| {
+                let mut q = *p;
+                q[1] *= if p[0] > 0.1 { -0.3 } else { 0.7 };
+                q[0] += 0.2 * p[1];
+                q
+            })
+            .collect();
+        let cells = mesh.num_cells();
+        // Whole, and cut where a batch of lanes is part full at both ends.
+        for range in [0..cells, 3..cells - 2, 5..6] {
+            let (energy, ratios) = v.energy_and_ratios(&x, range.clone());
+            let quality: Vec<Real> = range.clone().map(|c| mesh.cell_quality(c, &x)).collect();
+            let inverted = quality.iter().filter(|q| **q <= 0.0).count();
+            let least = quality.iter().copied().fold(Real::INFINITY, Real::min);
+            let most = quality.iter().copied().fold(-Real::INFINITY, Real::max);
+            assert_eq!(
+                (ratios.inverted, ratios.least, ratios.most),
+                (inverted, least, most)
+            );
+            let expected: Real = range
+                .zip(&quality)
+                .map(|(c, q)| 0.5 * v.k[c] * (q - 1.0).powi(2))
+                .sum();
+            assert!(
+                (energy - expected).abs() <= 1e-4 * expected,
+                "{energy} {expected}"
+            );
+        }
+        assert!(v.energy_and_ratios(&x, 0..cells).1.inverted > 0);
     }
 
     #[test]

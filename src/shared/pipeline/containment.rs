@@ -2,6 +2,7 @@
 
 use super::super::body::Deformable;
 use super::super::math::{Real, Vector, DIM};
+use super::super::model::volume::Ratios;
 use super::super::rapier::dynamics::RigidBodySet;
 use super::super::threads;
 use super::{RigidHold, StepContext, Touch};
@@ -37,7 +38,8 @@ pub(super) fn contain(
     quality.filter(|_| !exploded)
 }
 
-/// The cells' quality (signed volume over rest volume) over a body.
+/// The cells' quality (signed volume over rest volume) over a body, and its elastic energy
+/// (measured in the same pass over the cells when the model has a volumetric term).
 #[derive(Copy, Clone, Debug)]
 pub(super) struct Quality {
     /// Cells collapsed or inverted (quality ≤ 0).
@@ -46,36 +48,41 @@ pub(super) struct Quality {
     pub min_ratio: Real,
     /// Whether a cell's quality is above the stretch limit it was measured with.
     pub stretched: bool,
+    /// The elastic energy.
+    pub elastic: Real,
 }
 
 impl Quality {
-    /// One pass over the cells at the body's positions (`most`: the stretch limit, infinite
-    /// for none).
+    /// At the body's positions (`most`: the stretch limit, infinite for none).
     pub fn of(body: &Deformable, most: Real) -> Quality {
-        let none = Quality {
-            inverted: 0,
-            min_ratio: Real::INFINITY,
-            stretched: false,
-        };
         let limited = most.is_finite();
         let (mesh, x) = (&body.rest.mesh, &body.state.positions);
-        let part = |cells: std::ops::Range<usize>| {
-            let mut q = none;
-            for c in cells {
-                let ratio = mesh.cell_quality(c, x);
-                if ratio <= 0.0 {
-                    q.inverted += 1;
+        let (elastic, ratios) = body.state.elements.elastic_energy_and_ratios(x);
+        let ratios = ratios.unwrap_or_else(|| {
+            let none = Ratios {
+                inverted: 0,
+                least: Real::INFINITY,
+                most: -Real::INFINITY,
+            };
+            let part = |cells: std::ops::Range<usize>| {
+                let mut r = none;
+                for c in cells {
+                    let ratio = mesh.cell_quality(c, x);
+                    if ratio <= 0.0 {
+                        r.inverted += 1;
+                    }
+                    r.least = r.least.min(ratio);
+                    r.most = r.most.max(ratio);
                 }
-                q.min_ratio = q.min_ratio.min(ratio);
-                q.stretched |= limited && ratio > most;
-            }
-            q
-        };
-        let combine = |a: Quality, b: Quality| Quality {
-            inverted: a.inverted + b.inverted,
-            min_ratio: a.min_ratio.min(b.min_ratio),
-            stretched: a.stretched || b.stretched,
-        };
-        threads::chunked_fold(mesh.num_cells(), part, combine).unwrap_or(none)
+                r
+            };
+            threads::chunked_fold(mesh.num_cells(), part, Ratios::and).unwrap_or(none)
+        });
+        Quality {
+            inverted: ratios.inverted,
+            min_ratio: ratios.least,
+            stretched: limited && ratios.most > most,
+            elastic,
+        }
     }
 }
