@@ -1,13 +1,85 @@
 //! Loops that run on rayon's threads (feature `parallel`) for a large body and give the same
 //! result, bit for bit, whatever the thread count: the work is cut into fixed chunks whatever
 //! the threads, and partial results combine in chunk order.
+//!
+//! A step alternates such loops with serial work (contacts, the integrator's bookkeeping). A
+//! rayon thread left without work sleeps after a short spin, and waking it costs tens of
+//! microseconds (a join of two 200 µs halves after 200 µs of serial work took 270 µs on the
+//! 2-core machine of `docs/PERFORMANCE.md`, 200 µs back to back), more than a loop of a
+//! mid-size body saves. So while a step with a large body runs, [`with_team`] keeps rayon's
+//! other threads polling for its work instead of sleeping: those cores are busy for the
+//! length of the step, and free again when it returns.
 
 use std::ops::Range;
 
 use super::math::Real;
 
 /// Terms per chunk: enough that a chunk's work outweighs rayon's per-task cost.
-const CHUNK: usize = 1024;
+pub(crate) const CHUNK: usize = 1024;
+
+/// Runs `f`; with `busy` (and feature `parallel`, and more than one rayon thread), rayon's
+/// other threads poll for work (`rayon::yield_now`) until `f` returns, instead of sleeping
+/// between its parallel loops.
+pub(crate) fn with_team<R>(busy: bool, f: impl FnOnce() -> R) -> R {
+    #[cfg(feature = "parallel")]
+    if busy && rayon::current_num_threads() > 1 {
+        return team::run(f);
+    }
+    let _ = busy;
+    f()
+}
+
+#[cfg(feature = "parallel")]
+mod team {
+    use std::cell::Cell;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use std::sync::Arc;
+
+    thread_local! {
+        /// Whether this thread is polling for a team already.
+        static POLLING: Cell<bool> = const { Cell::new(false) };
+    }
+
+    /// Sets the flag when dropped: the pollers stop even if the step panics.
+    struct Done(Arc<AtomicBool>);
+
+    impl Drop for Done {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Release);
+        }
+    }
+
+    pub(super) fn run<R>(f: impl FnOnce() -> R) -> R {
+        run_counted(f, &Arc::new(AtomicUsize::new(0)))
+    }
+
+    /// [`run`], `pollers` counting the threads polling for it.
+    pub(super) fn run_counted<R>(f: impl FnOnce() -> R, pollers: &Arc<AtomicUsize>) -> R {
+        let done = Done(Arc::new(AtomicBool::new(false)));
+        let caller = std::thread::current().id();
+        for _ in 1..rayon::current_num_threads() {
+            let done = Arc::clone(&done.0);
+            let pollers = Arc::clone(pollers);
+            rayon::spawn(move || {
+                // Not on the caller (it would poll until its own step ends: never), nor
+                // inside another poller (a job the step waits for may be beneath it).
+                if std::thread::current().id() == caller || POLLING.with(Cell::get) {
+                    return;
+                }
+                POLLING.with(|p| p.set(true));
+                pollers.fetch_add(1, Ordering::AcqRel);
+                while !done.load(Ordering::Acquire) {
+                    if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                        std::hint::spin_loop();
+                    }
+                }
+                pollers.fetch_sub(1, Ordering::AcqRel);
+                POLLING.with(|p| p.set(false));
+            });
+        }
+        f()
+    }
+}
 
 /// `Σ part(chunk)` over `0..count` cut into fixed chunks, the chunks' sums added in order (on
 /// rayon's threads when there are several chunks and threads).
@@ -84,4 +156,70 @@ pub(crate) fn collect<T: Send>(count: usize, f: impl Fn(usize) -> T + Sync) -> V
             .collect();
     }
     (0..count).map(f).collect()
+}
+
+#[cfg(all(test, feature = "parallel"))]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    use std::time::{Duration, Instant};
+
+    /// Whether the team's pollers all stopped within a second.
+    fn stopped(pollers: &AtomicUsize) -> bool {
+        let start = Instant::now();
+        while pollers.load(Ordering::Acquire) > 0 {
+            if start.elapsed() > Duration::from_secs(1) {
+                return false;
+            }
+            std::thread::yield_now();
+        }
+        true
+    }
+
+    #[test]
+    fn a_parallel_team_does_the_work_and_lets_the_threads_go_even_after_a_panic() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let sum = |k: usize| chunked_sum(10 * CHUNK + k, |r| r.map(|i| i as Real).sum());
+        let pollers = Arc::new(AtomicUsize::new(0));
+        let (sums, polled) = pool.install(|| {
+            team::run_counted(
+                || {
+                    let sums: Vec<Real> = (0..50)
+                        .map(|k| {
+                            std::thread::sleep(Duration::from_micros(100));
+                            sum(k)
+                        })
+                        .collect();
+                    (sums, pollers.load(Ordering::Acquire))
+                },
+                &pollers,
+            )
+        });
+        assert_eq!(polled, 1, "the other thread polls while the work runs");
+        assert_eq!(sums, (0..50).map(sum).collect::<Vec<_>>());
+        assert!(
+            stopped(&pollers),
+            "a poller still runs after the team's work"
+        );
+        let panicked = pool.install(|| {
+            std::panic::catch_unwind(|| {
+                team::run_counted(
+                    || {
+                        sum(0);
+                        panic!("a step that fails");
+                    },
+                    &pollers,
+                )
+            })
+        });
+        assert!(panicked.is_err());
+        assert!(
+            stopped(&pollers),
+            "a poller still runs after the team's step panicked"
+        );
+    }
 }

@@ -72,6 +72,7 @@ use super::rapier::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodyS
 use super::rapier::geometry::{BroadPhaseBvh, ColliderHandle, ColliderSet};
 use super::report::StepReport;
 use super::set::{DeformableHandle, DeformableSet};
+use super::threads;
 
 /// Knobs of the pipeline.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -411,7 +412,12 @@ impl DeformablePipeline {
         };
         self.work.pushed.clear();
         sleep::sleep_held(&mut self.work.to_sleep, bodies);
-        self.step_bodies(deformables, &ctx, bodies, events);
+        // A body large enough for the threads' loops keeps the threads polling through the
+        // step ([`threads::with_team`]).
+        let busy = deformables
+            .iter()
+            .any(|(_, b)| b.rest.mesh.num_cells() > threads::CHUNK);
+        threads::with_team(busy, || self.step_bodies(deformables, &ctx, bodies, events));
         for h in &self.work.pushed {
             if let Some(rb) = bodies.get_mut(*h) {
                 coupling::match_rapier_integration(rb, gravity, dt, params.num_solver_iterations);
