@@ -7,6 +7,7 @@ use super::error::BuildError;
 use super::material::{Material, Stiffness};
 use super::math::{self, AngVector, Real, Vector, DIM};
 use super::mesh::Mesh;
+use super::model::volume::Ratios;
 use super::model::{Accumulator, ElementModel, Motion};
 use super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::rapier::geometry::{ColliderHandle, ColliderSet};
@@ -193,6 +194,26 @@ impl Deformable {
     /// Elastic energy stored in the elements.
     pub fn elastic_energy(&self) -> Real {
         self.state.elements.elastic_energy(&self.state.positions)
+    }
+
+    /// [`ModelState::elastic_energy_and_ratios`] at the body's positions, measured again only
+    /// if they changed (bit for bit) since the last measure, or if the model's energy depends
+    /// on more than the positions (shape matching's rotations): a step measures its end once
+    /// for its energy bookkeeping and its report, and the next step starts there.
+    pub(crate) fn measured_energy(&mut self) -> (Real, Option<Ratios>) {
+        let x = &self.state.positions;
+        let memo = &mut self.step.energy_memo;
+        let bits = |v: &Vector| v.to_array().map(Real::to_bits);
+        if memo.at.len() == x.len() && memo.at.iter().zip(x).all(|(a, b)| bits(a) == bits(b)) {
+            return (memo.energy, memo.ratios);
+        }
+        let (energy, ratios) = self.state.elements.elastic_energy_and_ratios(x);
+        if self.state.elements.warm_start().is_empty() {
+            memo.at.clear();
+            memo.at.extend_from_slice(x);
+            (memo.energy, memo.ratios) = (energy, ratios);
+        }
+        (energy, ratios)
     }
 
     /// Number of cells that are collapsed or inverted now (quality ≤ 0).
@@ -541,4 +562,57 @@ pub(crate) fn check_state(
         });
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::mesh::CellKind;
+    use super::*;
+
+    #[test]
+    fn the_energy_is_measured_again_whenever_a_node_moved() {
+        for model in [
+            ElementModel::EdgeRepulsion,
+            ElementModel::Springs,
+            ElementModel::SHAPE_MATCHING,
+        ] {
+            let mut body = DeformableBuilder::cuboid(Vector::splat(0.5), [3; DIM])
+                .cells(CellKind::Simplex)
+                .model(model)
+                .build()
+                .unwrap();
+            let rest = body.positions().to_vec();
+            let mut bent = rest.clone();
+            bent[0] += Vector::splat(0.05);
+            let fresh = |body: &Deformable| {
+                let x = &body.state.positions;
+                body.state.elements.elastic_energy_and_ratios(x)
+            };
+            for x in [&bent, &rest, &bent] {
+                body.set_positions(x).unwrap();
+                assert_eq!(body.measured_energy(), fresh(&body), "{model:?}");
+                assert_eq!(
+                    body.measured_energy(),
+                    fresh(&body),
+                    "{model:?}, measured twice"
+                );
+            }
+            // Moved by the step itself, not through a setter.
+            body.state.positions[1][0] += 1e-3;
+            assert_eq!(
+                body.measured_energy(),
+                fresh(&body),
+                "{model:?}, one node moved"
+            );
+            assert!(
+                body.measured_energy().0 > fresh_at(&body, &rest),
+                "{model:?}"
+            );
+        }
+    }
+
+    /// The elastic energy of `body`'s model at `x`.
+    fn fresh_at(body: &Deformable, x: &[Vector]) -> Real {
+        body.state.elements.elastic_energy(x)
+    }
 }

@@ -11,6 +11,7 @@ use super::super::integrator::MidpointState;
 use super::super::material::Resolved;
 use super::super::math::{Real, Vector, DIM};
 use super::super::mesh::Mesh;
+use super::super::model::volume::Ratios;
 use super::super::model::{Accumulator, ElementModel, ModelState, Slack};
 use super::super::rapier::geometry::ColliderHandle;
 use super::super::report::DeformableReport;
@@ -121,6 +122,18 @@ pub(crate) struct StepBuffers {
     /// Whether [`Integrator::Auto`](super::super::Integrator::Auto) steps the body implicitly
     /// this step.
     pub auto_implicit: bool,
+    /// The last measure of [`Deformable::measured_energy`](super::Deformable::measured_energy).
+    pub energy_memo: EnergyMemo,
+}
+
+/// An elastic energy and the cells' volume ratios, and the positions they were measured at
+/// (none measured yet when empty). The rest data of the body's model does not change after it
+/// is built, so the positions alone say whether the measure still holds.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct EnergyMemo {
+    pub at: Vec<Vector>,
+    pub energy: Real,
+    pub ratios: Option<Ratios>,
 }
 
 impl StepBuffers {
@@ -136,6 +149,7 @@ impl StepBuffers {
             midpoint: MidpointState::default(),
             global_iterations: 0,
             auto_implicit: false,
+            energy_memo: EnergyMemo::default(),
         }
     }
 }

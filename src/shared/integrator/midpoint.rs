@@ -225,7 +225,7 @@ fn internal(body: &Deformable, elastic: Real) -> Internal {
 /// to take.
 pub(crate) fn begin(body: &mut Deformable) -> Real {
     let theta = body.step.midpoint.theta;
-    let elastic = body.elastic_energy();
+    let (elastic, _) = body.measured_energy();
     let start = internal(body, elastic);
     body.step.midpoint.pending = Some(Pending {
         v0: body.state.velocities.clone(),
@@ -314,8 +314,8 @@ pub(crate) fn finish(body: &mut Deformable) {
         return;
     }
     let (energy, momentum) = (pending.energy, pending.momentum);
+    let (elastic, _) = body.measured_energy();
     let masses = &body.rest.masses;
-    let elastic = body.elastic_energy();
     let now = internal(body, elastic);
     let turn = math::angular_velocity_for(&now.offsets, masses, momentum - now.momentum);
     for (v, r) in body.state.velocities.iter_mut().zip(&now.offsets) {

@@ -54,10 +54,10 @@ pub(super) struct Quality {
 
 impl Quality {
     /// At the body's positions (`most`: the stretch limit, infinite for none).
-    pub fn of(body: &Deformable, most: Real) -> Quality {
+    pub fn of(body: &mut Deformable, most: Real) -> Quality {
         let limited = most.is_finite();
+        let (elastic, ratios) = body.measured_energy();
         let (mesh, x) = (&body.rest.mesh, &body.state.positions);
-        let (elastic, ratios) = body.state.elements.elastic_energy_and_ratios(x);
         let ratios = ratios.unwrap_or_else(|| {
             let none = Ratios {
                 inverted: 0,
