@@ -57,13 +57,17 @@ impl DeformableWorld {
     /// refuses it instead.
     ///
     /// A body whose explicit substeps follow its calibrated stability bound (or on which
-    /// [`Integrator::Auto`] chooses by it) has that bound calibrated here, once, rather than in
-    /// its first step: that took 10 ms for each shape-matched pad of `scenes pinch`, whose first
-    /// step at 1 ms then took five times its median step.
+    /// [`Integrator::Auto`] chooses by it, or whose implicit step chooses its Newton
+    /// iterations over the whole body by it) has that bound calibrated here, once, rather than
+    /// in its first step: that took 10 ms for each shape-matched pad of `scenes pinch`, whose
+    /// first step at 1 ms then took five times its median step, and 10 ms of the res-9 `fall`
+    /// cube's first 60 Hz midpoint step (six times its median).
     pub fn insert(&mut self, deformable: Deformable) -> DeformableHandle {
         let settings = &self.pipeline.settings;
+        let implicit = settings.integrator.steps_implicitly(&deformable);
         if matches!(settings.integrator, Integrator::Auto { .. })
             || settings.calibrates(&deformable)
+            || (implicit && settings.global_iterations.is_none())
         {
             deformable.calibrate();
         }
@@ -199,21 +203,30 @@ mod tests {
     }
 
     #[test]
-    fn insertion_calibrates_a_body_the_explicit_step_takes_and_no_other() {
-        for (integrator, fixed, calibrated) in [
-            (Integrator::Explicit, None, true),
-            (Integrator::Explicit, Some(10), false),
-            (Integrator::Auto { iterations: 2 }, None, true),
-            (Integrator::Implicit { iterations: 2 }, None, false),
+    fn insertion_calibrates_a_body_whose_step_reads_its_bound_and_no_other() {
+        let (implicit, midpoint) = (
+            Integrator::Implicit { iterations: 2 },
+            Integrator::Midpoint { iterations: 2 },
+        );
+        for (integrator, fixed, global, calibrated) in [
+            (Integrator::Explicit, None, None, true),
+            (Integrator::Explicit, Some(10), None, false),
+            (Integrator::Auto { iterations: 2 }, None, None, true),
+            // The implicit steps choose their Newton iterations by it, unless told how many.
+            (implicit, None, None, true),
+            (midpoint, None, None, true),
+            (implicit, None, Some(0), false),
+            (midpoint, None, Some(2), false),
         ] {
             let mut world = DeformableWorld::new();
             world.pipeline.settings.integrator = integrator;
             world.pipeline.settings.fixed_substeps = fixed;
+            world.pipeline.settings.global_iterations = global;
             let h = world.insert(cube());
             assert_eq!(
                 world.deformables[h].rest.calibrated(),
                 calibrated,
-                "{integrator:?}, fixed substeps {fixed:?}"
+                "{integrator:?}, fixed substeps {fixed:?}, global iterations {global:?}"
             );
         }
     }
