@@ -205,7 +205,8 @@ fn the_same_scene_twice_gives_the_same_state_bit_for_bit() {
 }
 
 /// With `parallel`, bodies large enough to take the two-pass force path (and rapier's own
-/// parallel solver) give the same state on 1, 2 and 3 threads.
+/// parallel solver) give the same state on 1, 2 and 3 threads, whether the threads poll for
+/// the step's work or sleep between its loops.
 #[cfg(feature = "parallel")]
 #[test]
 fn the_state_does_not_depend_on_the_thread_count() {
@@ -213,26 +214,32 @@ fn the_state_does_not_depend_on_the_thread_count() {
     let resolution = if DIM == 2 { 36 } else { 8 };
     let steps = 40;
     let models = [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING];
-    let hashes: Vec<Vec<u64>> = [1, 2, 3]
+    let runs = [(1, true), (2, true), (3, true), (2, false)];
+    let hashes: Vec<Vec<u64>> = runs
         .into_iter()
-        .map(|threads| {
+        .map(|(threads, poll)| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .expect("a thread pool");
             pool.install(|| {
-                let s = scene(&models, resolution);
+                let mut s = scene(&models, resolution);
+                s.world.pipeline.settings.poll_threads = poll;
                 let cells = s.world.deformables[s.cubes[0]].mesh().num_cells();
                 assert!(cells * 20 >= PARALLEL_MIN_WORK, "large enough to split");
+                assert!(cells > 1024, "large enough for the threads to poll");
                 let (hashes, coverage) = run(s, steps);
                 assert!(coverage.box_contact_steps > 0, "{coverage:?}");
                 hashes
             })
         })
         .collect();
-    for (threads, h) in [2, 3].iter().zip(&hashes[1..]) {
+    for (run, h) in runs[1..].iter().zip(&hashes[1..]) {
         if let Some(k) = hashes[0].iter().zip(h).position(|(x, y)| x != y) {
-            panic!("1 and {threads} threads differ from step {}", k + 1);
+            panic!(
+                "1 thread and {run:?} (threads, polling) differ from step {}",
+                k + 1
+            );
         }
     }
 }

@@ -141,6 +141,14 @@ pub struct PipelineSettings {
     /// each other are left alone.
     #[cfg_attr(feature = "serde", serde(default = "default_true"))]
     pub damp_held: bool,
+    /// With the `parallel` feature: whether, while a step with a body of more than 1 024 cells
+    /// runs, rayon's other threads poll for its work instead of sleeping between its parallel
+    /// loops (default true). Waking a sleeping thread costs tens of microseconds a loop (70 µs
+    /// on the 2-core machine of `docs/PERFORMANCE.md`, a tenth of a res-17 cube's explicit
+    /// step); polling keeps those cores busy for the length of the step. Turn it off when
+    /// other threads need the cores during the step. The results are the same either way.
+    #[cfg_attr(feature = "serde", serde(default = "default_true"))]
+    pub poll_threads: bool,
 }
 
 #[cfg(feature = "serde")]
@@ -167,6 +175,7 @@ impl Default for PipelineSettings {
             teleport_speed: 50.0,
             global_iterations: None,
             damp_held: true,
+            poll_threads: true,
         }
     }
 }
@@ -414,9 +423,10 @@ impl DeformablePipeline {
         sleep::sleep_held(&mut self.work.to_sleep, bodies);
         // A body large enough for the threads' loops keeps the threads polling through the
         // step ([`threads::with_team`]).
-        let busy = deformables
-            .iter()
-            .any(|(_, b)| b.rest.mesh.num_cells() > threads::CHUNK);
+        let busy = self.settings.poll_threads
+            && deformables
+                .iter()
+                .any(|(_, b)| b.rest.mesh.num_cells() > threads::CHUNK);
         threads::with_team(busy, || self.step_bodies(deformables, &ctx, bodies, events));
         for h in &self.work.pushed {
             if let Some(rb) = bodies.get_mut(*h) {
