@@ -165,11 +165,11 @@ mod tests {
     use std::sync::Arc;
     use std::time::{Duration, Instant};
 
-    /// Whether the team's pollers all stopped within a second.
+    /// Whether the team's pollers all stopped within five seconds.
     fn stopped(pollers: &AtomicUsize) -> bool {
         let start = Instant::now();
         while pollers.load(Ordering::Acquire) > 0 {
-            if start.elapsed() > Duration::from_secs(1) {
+            if start.elapsed() > Duration::from_secs(5) {
                 return false;
             }
             std::thread::yield_now();
@@ -188,13 +188,21 @@ mod tests {
         let (sums, polled) = pool.install(|| {
             team::run_counted(
                 || {
+                    // The other thread starts polling (within seconds, on a loaded machine).
+                    let start = Instant::now();
+                    while pollers.load(Ordering::Acquire) == 0
+                        && start.elapsed() < Duration::from_secs(5)
+                    {
+                        std::thread::sleep(Duration::from_micros(100));
+                    }
+                    let polled = pollers.load(Ordering::Acquire);
                     let sums: Vec<Real> = (0..50)
                         .map(|k| {
                             std::thread::sleep(Duration::from_micros(100));
                             sum(k)
                         })
                         .collect();
-                    (sums, pollers.load(Ordering::Acquire))
+                    (sums, polled)
                 },
                 &pollers,
             )
