@@ -442,17 +442,12 @@ impl ModelState {
         let Some(v) = &self.volume else {
             return (self.elastic_energy(x), None);
         };
-        let none = volume::Ratios {
-            inverted: 0,
-            least: Real::INFINITY,
-            most: -Real::INFINITY,
-        };
         let (energy, ratios) = super::threads::chunked_fold(
             v.cells().len() / SIMPLEX_ARITY,
             |cells| v.energy_and_ratios(x, cells),
             |(e1, r1), (e2, r2)| (e1 + e2, r1.and(r2)),
         )
-        .unwrap_or((0.0, none));
+        .unwrap_or((0.0, volume::Ratios::NONE));
         (energy + elements_energy(&self.elements, x), Some(ratios))
     }
 }

@@ -189,6 +189,7 @@ impl Volume {
     /// (whose rest volume is `D0/DIM!`).
     ///
     /// [`Mesh::cell_quality`]: super::super::mesh::Mesh::cell_quality
+    #[inline]
     pub fn energy_and_ratios(&self, x: &[Vector], cells: std::ops::Range<usize>) -> (Real, Ratios) {
         let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
         let lane_index = Lane::new(each(|l| l as Real));
@@ -236,6 +237,13 @@ pub(crate) struct Ratios {
 }
 
 impl Ratios {
+    /// Those of no cell.
+    pub const NONE: Ratios = Ratios {
+        inverted: 0,
+        least: Real::INFINITY,
+        most: -Real::INFINITY,
+    };
+
     /// Those of the cells of both.
     pub fn and(self, o: Ratios) -> Ratios {
         Ratios {

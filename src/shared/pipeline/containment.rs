@@ -59,13 +59,8 @@ impl Quality {
         let (elastic, ratios) = body.measured_energy();
         let (mesh, x) = (&body.rest.mesh, &body.state.positions);
         let ratios = ratios.unwrap_or_else(|| {
-            let none = Ratios {
-                inverted: 0,
-                least: Real::INFINITY,
-                most: -Real::INFINITY,
-            };
             let part = |cells: std::ops::Range<usize>| {
-                let mut r = none;
+                let mut r = Ratios::NONE;
                 for c in cells {
                     let ratio = mesh.cell_quality(c, x);
                     if ratio <= 0.0 {
@@ -76,7 +71,7 @@ impl Quality {
                 }
                 r
             };
-            threads::chunked_fold(mesh.num_cells(), part, Ratios::and).unwrap_or(none)
+            threads::chunked_fold(mesh.num_cells(), part, Ratios::and).unwrap_or(Ratios::NONE)
         });
         Quality {
             inverted: ratios.inverted,
