@@ -52,6 +52,8 @@ pub(crate) struct AfterContacts<'a> {
     /// deformable (zero for none; empty when no node meets one): it carries them
     /// ([`Hold::Carries`]) instead of being held where they go.
     pub carried: &'a [Real],
+    /// Per node that carries, the velocity what it carries brings (empty when `carried` is).
+    pub carried_velocity: &'a [Vector],
     /// Per node, whether a contact with a fixed or kinematic collider found it, when the body's
     /// rigid motion answered those contacts first ([`contact::rigid_answer`]; empty when it did
     /// not): such a node is held where its velocity takes it even if its own contact had
@@ -423,6 +425,7 @@ pub(crate) struct Together<'a> {
     pub before: Vec<Vector>,
     pub lift: Vec<Option<(Vector, Vector)>>,
     pub carried: Vec<Real>,
+    pub carried_velocity: Vec<Vector>,
     /// Out: the force each held node's hold exerted on it over the step.
     pub reactions: Vec<Vector>,
 }
@@ -463,6 +466,7 @@ impl Integrator {
                     before: &m.before,
                     lift: &m.lift,
                     carried: &m.carried,
+                    carried_velocity: &m.carried_velocity,
                     touched: &[],
                 };
                 held_nodes(m.body, h, Some(at))
@@ -630,7 +634,7 @@ fn held_nodes(body: &Deformable, h: Real, after: Option<AfterContacts<'_>>) -> V
             match after {
                 Some(a) if v[i] != a.before[i] && a.carried.get(i).is_some_and(|&m| m > 0.0) => {
                     Hold::Carries {
-                        target: at,
+                        target: x0[i] + a.carried_velocity[i] * h,
                         mass: a.carried[i],
                     }
                 }

@@ -650,10 +650,20 @@ fn a_body_thrown_at_a_free_cube_conserves_momentum_and_creates_no_energy() {
         Integrator::Implicit { iterations: 2 },
         Integrator::Midpoint { iterations: 2 },
     ];
-    for (name, collider, integrator) in integrators.into_iter().flat_map(|i| {
+    // With the share of its energy it keeps at most once past the cube.
+    for (name, collider, left, integrator) in integrators.into_iter().flat_map(|i| {
         [
-            ("box", cuboid(Vector::splat(0.1)).density(100.0), i),
-            ("ball", ColliderBuilder::ball(0.1).density(100.0), i),
+            ("box", cuboid(Vector::splat(0.1)).density(100.0), 0.5, i),
+            ("ball", ColliderBuilder::ball(0.1).density(100.0), 0.5, i),
+            // Far heavier than the nodes it strikes (4 kg against the cube's 12.5 in 3D, 20
+            // against 25 in 2D), it drives on: the struck nodes carry their shares of it, drawn
+            // on at its speed, not at the speed the contacts threw the nodes back at.
+            (
+                "heavy box",
+                cuboid(Vector::splat(0.1)).density(500.0),
+                0.75,
+                i,
+            ),
         ]
     }) {
         let name = format!("{name} {integrator:?}");
@@ -671,7 +681,7 @@ fn a_body_thrown_at_a_free_cube_conserves_momentum_and_creates_no_energy() {
         }
         let (_, e) = o[o.len() - 1];
         assert!(
-            e < 0.5 * e0,
+            e < left * e0,
             "{name}: it never hit the cube ({e} of {e0} J left)"
         );
     }

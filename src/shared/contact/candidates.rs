@@ -2,7 +2,7 @@
 //! phase, with their motion over the step and their point features.
 
 use super::super::coupling::{self, BodyMotion, MotionKind};
-use super::super::math::{self, Pose, Real, Vector, DIM};
+use super::super::math::{self, AngVector, Pose, Real, Vector, DIM};
 use super::super::rapier::dynamics::{CoefficientCombineRule, RigidBodyHandle, RigidBodySet};
 use super::super::rapier::geometry::{
     Aabb, BoundingVolume, BroadPhaseBvh, Collider, ColliderHandle, ColliderSet,
@@ -57,6 +57,9 @@ pub(crate) struct Candidate<'a> {
     /// Fractions of the step at the start and at the end of the current substep.
     pub start: Real,
     pub end: Real,
+    /// A dynamic body's velocity and angular velocity, and its centre of mass, as the current
+    /// substep's contacts found it (before their impulses).
+    pub found: Option<(Vector, AngVector, Vector)>,
 }
 
 impl Candidate<'_> {
@@ -82,7 +85,18 @@ impl Candidate<'_> {
         self.prev_pose = self.pose;
         self.start = self.end;
         self.end = s1;
+        self.found = self
+            .rigid(motions)
+            .and_then(|b| bodies.get(b))
+            .map(|rb| (rb.linvel(), rb.angvel(), rb.center_of_mass()));
         self.update(s1, dt, motions, bodies);
+    }
+
+    /// The velocity of a dynamic body at `anchor` as the current substep's contacts found it,
+    /// before their impulses ([`Candidate::anchored_velocity`] at fraction `s`), or `None`.
+    pub fn found_velocity(&self, anchor: Vector, s: Real) -> Option<Vector> {
+        self.found
+            .map(|(v, w, com)| v + math::ang_cross(w, anchor - com) + self.drift * s)
     }
 
     /// Recomputes the end-of-substep pose (at fraction `s1`), after an impulse changed the
@@ -258,6 +272,7 @@ pub(crate) fn candidate<'a>(
         prev_pose: pose0,
         start: 0.0,
         end: 0.0,
+        found: None,
     }
 }
 

@@ -95,6 +95,12 @@ impl Contact {
         self.solve(velocities, at, candidates, bodies);
     }
 
+    /// The normal velocity relative to the collider at which the deformable's side just meets
+    /// it at the end of the substep (the target less its bounce).
+    pub fn meets(&self) -> Real {
+        self.target - self.bounce
+    }
+
     /// Whether the contact's target includes a bounce.
     pub fn bounces(&self) -> bool {
         self.bounce > 0.0

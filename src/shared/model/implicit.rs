@@ -248,9 +248,9 @@ pub(crate) enum Hold {
         normal: Vector,
         target: Vector,
     },
-    /// A node a dynamic body lighter than the deformable stopped (or threw back) to `target`,
-    /// where the body goes: free, but carrying `mass`, its share of the body's effective mass,
-    /// drawn there with it. Held there, as for a body that does not yield, the node's cells
+    /// A node a dynamic body lighter than the deformable stopped: free, but carrying `mass`,
+    /// its share of the body's effective mass, drawn to `target`, where the body's surface
+    /// would go unstopped. Held there, as for a body that does not yield, the node's cells
     /// pushed the body as if it could hold them (a 0.08 kg box landing on a slab of 1 kg nodes
     /// was launched at 28 m/s). What the carried mass exerts on the node is its reaction,
     /// passed on to the body. A heavier body holds its nodes ([`Hold::Contact`]): a 1000 kg

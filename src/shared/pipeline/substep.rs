@@ -312,6 +312,11 @@ fn step_together(
             } else {
                 Vec::new()
             },
+            carried_velocity: if m.live {
+                carried.velocity.clone()
+            } else {
+                Vec::new()
+            },
             body: &mut *m.body,
             reactions: Vec::new(),
         })
@@ -748,6 +753,7 @@ fn advance(
         before: &before,
         lift: &lift,
         carried: &carried.carried,
+        carried_velocity: &carried.velocity,
         touched: &touched,
     };
     let set = body.state.velocities.clone();
@@ -789,6 +795,10 @@ struct Carried {
     nodes: Vec<Real>,
     /// Per node, the sum of its shares if it carries them, else zero (empty: none carries).
     carried: Vec<Real>,
+    /// Per node that carries, the velocity its shares bring: its own after the contacts, with
+    /// the part along each contact's normal that of the body there before them (the contacts
+    /// threw the node back off the body, which the node's share of it does not do).
+    velocity: Vec<Vector>,
 }
 
 impl Carried {
@@ -805,6 +815,7 @@ impl Carried {
                 rows: Vec::new(),
                 nodes: Vec::new(),
                 carried: Vec::new(),
+                velocity: Vec::new(),
             };
         }
         let mut count = vec![0usize; candidates.len()];
@@ -815,6 +826,8 @@ impl Carried {
         let n = body.num_nodes();
         let (mut shares, mut nodes, mut carried) = (Vec::new(), vec![0.0; n], vec![0.0; n]);
         let mut held = vec![false; n];
+        let v = &body.state.velocities;
+        let mut velocity = vec![Vector::ZERO; n];
         for r in rows {
             let cand = &candidates[r.candidate];
             let w = cand.inv_mass_at(r.anchor(), r.normal, at.motions, bodies);
@@ -824,21 +837,32 @@ impl Carried {
                 0.0
             };
             shares.push(share);
+            let found = cand.found_velocity(r.anchor(), at.s1);
             for (i, weight) in r.moving_nodes() {
                 nodes[i] += share * weight;
                 carried[i] += share * weight;
                 held[i] |= w * mass < 1.0;
+                if let Some(u) = found {
+                    let along = r.normal.dot(u - v[i]) + r.meets();
+                    velocity[i] += r.normal * (share * weight * along);
+                }
             }
         }
-        for (c, held) in carried.iter_mut().zip(held) {
+        for (i, (c, held)) in carried.iter_mut().zip(held).enumerate() {
             if held {
                 *c = 0.0;
             }
+            velocity[i] = if *c > 0.0 {
+                v[i] + velocity[i] / nodes[i]
+            } else {
+                v[i]
+            };
         }
         Carried {
             rows: shares,
             nodes,
             carried,
+            velocity,
         }
     }
 }
