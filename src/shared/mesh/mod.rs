@@ -253,7 +253,8 @@ impl Mesh {
 
     /// All distinct vertex pairs that share a cell (edges and, for boxes, face and body
     /// diagonals), each with the volume it stands for: the sum over the cells containing it
-    /// of `V_cell / pairs_per_cell`. In first-appearance order (deterministic).
+    /// of `V_cell / pairs_per_cell`. Each pair lowest node first, in order of their nodes (a
+    /// loop over them walks the nodes in order, and the pairs of a run of nodes are a run).
     pub fn vertex_pairs(&self) -> Vec<([u32; 2], Real)> {
         let a = self.kind.arity();
         let per_cell = (a * (a - 1) / 2) as Real;
@@ -278,6 +279,7 @@ impl Mesh {
                 }
             }
         }
+        out.sort_unstable_by_key(|(key, _)| *key);
         out
     }
 

@@ -218,9 +218,9 @@ impl EdgeRepulsion {
         })
     }
 
-    /// Adds the repulsions (and volumetric terms) of cells `ids` on the nodes `force` and
-    /// `stiffness` hold, nodes `first..first + force.len()`, as [`EdgeRepulsion::accumulate`]
-    /// adds them; returns the cells' crossing limiter.
+    /// Adds the repulsions (and volumetric terms) of cells `ids` into `force` and `stiffness`,
+    /// which hold nodes `first..first + force.len()` (every node of the cells), as
+    /// [`EdgeRepulsion::accumulate`] adds them; returns the cells' crossing limiter.
     #[cfg(feature = "parallel")]
     pub(crate) fn add_cells(
         &self,
@@ -230,14 +230,24 @@ impl EdgeRepulsion {
         force: &mut [Vector],
         stiffness: &mut [Real],
     ) -> Real {
-        let nodes = force.len();
-        self.each_cell(ids, (x, v, volume), |_, ids, f, k_row| {
-            for a in 0..SIMPLEX_ARITY {
-                let i = (ids[a] as usize).wrapping_sub(first);
-                if i < nodes {
+        if first == 0 && force.len() == x.len() {
+            // All of the nodes (one thread): indexed as the serial loop indexes them.
+            let n = x.len();
+            let (v, force, stiffness) = (&v[..n], &mut force[..n], &mut stiffness[..n]);
+            return self.each_cell(ids, (x, v, volume), |_, ids, f, k_row| {
+                for a in 0..SIMPLEX_ARITY {
+                    let i = ids[a] as usize;
                     force[i] += f[a];
                     stiffness[i] += k_row[a];
                 }
+            });
+        }
+        let (v, stiffness) = (&v[..x.len()], &mut stiffness[..force.len()]);
+        self.each_cell(ids, (x, v, volume), |_, ids, f, k_row| {
+            for a in 0..SIMPLEX_ARITY {
+                let i = ids[a] as usize - first;
+                force[i] += f[a];
+                stiffness[i] += k_row[a];
             }
         })
     }

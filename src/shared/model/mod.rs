@@ -246,7 +246,7 @@ pub(crate) struct ModelState {
     #[cfg(feature = "parallel")]
     split: Option<parallel::Split>,
     /// Edge repulsion's evaluation by slabs, which replaces the split where the node numbering
-    /// allows it (made for the thread count at hand).
+    /// allows it (on every thread count, one included).
     #[cfg(feature = "parallel")]
     slabs: Option<slabs::Slabs>,
 }
@@ -327,7 +327,7 @@ impl ModelState {
         let split = parallel::Split::build_if_large(&elements, mesh);
         #[cfg(feature = "parallel")]
         let slabs = match (&split, &elements) {
-            (Some(_), Elements::EdgeRepulsion(er)) => slabs::Slabs::of(er, mesh.nodes().len(), 2),
+            (Some(_), Elements::EdgeRepulsion(er)) => slabs::Slabs::of(er, mesh.nodes().len()),
             _ => None,
         };
         Ok(ModelState {
@@ -357,21 +357,13 @@ impl ModelState {
 
     fn accumulate_elements(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
         #[cfg(feature = "parallel")]
-        if let (Some(slabs), Elements::EdgeRepulsion(er)) = (&mut self.slabs, &self.elements) {
-            let threads = rayon::current_num_threads();
-            if threads > 1 {
-                if slabs.count() != threads {
-                    // As many slabs as threads, or as many as the body allows.
-                    if let Some(new) = slabs::Slabs::of(er, x.len(), threads) {
-                        *slabs = new;
-                    }
-                }
-                assert!(v.len() == x.len() && acc.force.len() == x.len());
-                assert!(acc.stiffness.len() == x.len() && acc.damping.len() == x.len());
-                self.bounds.add_to(acc);
-                let state = (x, v, self.volume.as_ref());
-                return slabs.accumulate(er, state, &mut acc.force, &mut acc.stiffness);
-            }
+        if let (Some(slabs), Elements::EdgeRepulsion(er)) = (&self.slabs, &self.elements) {
+            // On any number of threads: the slabs' order is the body's, not the threads'.
+            assert!(v.len() == x.len() && acc.force.len() == x.len());
+            assert!(acc.stiffness.len() == x.len() && acc.damping.len() == x.len());
+            self.bounds.add_to(acc);
+            let state = (x, v, self.volume.as_ref());
+            return slabs.accumulate(er, state, &mut acc.force, &mut acc.stiffness);
         }
         #[cfg(feature = "parallel")]
         if let Some(split) = &mut self.split {

@@ -149,11 +149,26 @@ impl Springs {
         }
     }
 
-    /// Adds the forces of springs `ids` (and, for the nonlinear law, their stiffness rows) on
-    /// the nodes `force` and `stiffness` hold, nodes `first..first + force.len()`, as
-    /// [`Springs::accumulate`] adds them.
+    /// Adds the forces of springs `ids` (and, for the nonlinear law, their stiffness rows) into
+    /// `force` and `stiffness`, which hold nodes `first..first + force.len()` (every node of
+    /// the springs), as [`Springs::accumulate`] adds them.
     #[cfg(feature = "parallel")]
     pub(crate) fn add_some(
+        &self,
+        ids: std::ops::Range<usize>,
+        first: usize,
+        state: (&[Vector], &[Vector]),
+        force: &mut [Vector],
+        stiffness: &mut [Real],
+    ) {
+        match self.law {
+            Law::Linear => self.add_some_law::<false>(ids, first, state, force, stiffness),
+            Law::Nonlinear => self.add_some_law::<true>(ids, first, state, force, stiffness),
+        }
+    }
+
+    #[cfg(feature = "parallel")]
+    fn add_some_law<const NONLINEAR: bool>(
         &self,
         ids: std::ops::Range<usize>,
         first: usize,
@@ -162,25 +177,16 @@ impl Springs {
         stiffness: &mut [Real],
     ) {
         let count = ids.len();
-        let nodes = force.len();
+        let v = &v[..x.len()];
+        let stiffness = &mut stiffness[..force.len()];
         for (((&pair, &l0), &k), &c) in self.terms(ids.start).take(count) {
-            let (f, k_row) = match self.law {
-                Law::Linear => term::<false>(pair, l0, k, c, x, v),
-                Law::Nonlinear => term::<true>(pair, l0, k, c, x, v),
-            };
-            let i = (pair[0] as usize).wrapping_sub(first);
-            if i < nodes {
-                force[i] += f;
-                if self.law == Law::Nonlinear {
-                    stiffness[i] += k_row;
-                }
-            }
-            let j = (pair[1] as usize).wrapping_sub(first);
-            if j < nodes {
-                force[j] -= f;
-                if self.law == Law::Nonlinear {
-                    stiffness[j] += k_row;
-                }
+            let (f, k_row) = term::<NONLINEAR>(pair, l0, k, c, x, v);
+            let (i, j) = (pair[0] as usize - first, pair[1] as usize - first);
+            force[i] += f;
+            force[j] -= f;
+            if NONLINEAR {
+                stiffness[i] += k_row;
+                stiffness[j] += k_row;
             }
         }
     }
