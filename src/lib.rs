@@ -41,8 +41,8 @@
 //! ```
 //!
 //! Cargo features: `dim2` and `dim3` (default), `rerun` (logging to the Rerun viewer), `parallel`: element forces of
-//! large bodies on rayon's threads, with rapier's own `parallel` (the parallel forces equal
-//! the serial ones bit for bit whatever the number of threads, see [`dim3::model`]), `serde`:
+//! large bodies on rayon's threads, with rapier's own `parallel` (the same bits whatever the
+//! number of threads, see [`dim3::model`]), `serde`:
 //! snapshots of a running world that continue bit for bit (see [`dim3::snapshot`]), and
 //! `enhanced-determinism`: rapier's, for the same results across platforms.
 //!

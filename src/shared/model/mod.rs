@@ -48,6 +48,10 @@
 //! Splitting costs an extra pass over the buffers and rayon's task overhead, so only models
 //! whose serial evaluation costs at least [`PARALLEL_MIN_WORK`] take the parallel path, and
 //! only when rayon has more than one thread; smaller meshes run the serial loop.
+//!
+//! A large edge-repulsion body goes by slabs of nodes instead (`slabs.rs`), on every thread
+//! count, one included: its forces are the same bits whatever the number of threads, and
+//! equal the serial loop's to rounding (the slabs sum in their own order).
 
 pub mod centroid_springs;
 pub mod edge_repulsion;
