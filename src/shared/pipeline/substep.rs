@@ -796,8 +796,9 @@ struct Carried {
     /// Per node, the sum of its shares if it carries them, else zero (empty: none carries).
     carried: Vec<Real>,
     /// Per node that carries, the velocity its shares bring: its own after the contacts, with
-    /// the part along each contact's normal that of the body there before them (the contacts
-    /// threw the node back off the body, which the node's share of it does not do).
+    /// the part along each contact's normal that of the body there before them plus the
+    /// relative speed that just meets it (`Contact::meets`): where the body's surface goes
+    /// unstopped. The contacts threw the node back off the body, which its share does not do.
     velocity: Vec<Vector>,
 }
 
