@@ -1277,9 +1277,10 @@ fn cell_lanes_at<P: Positions + ?Sized>(
         }
         let longest = longest.sqrt();
         let mut lane_reach = d.simd_gt(zero).select(Lane::splat(Real::INFINITY), zero);
+        // The block is symmetric: its upper triangle is summed, mirrored at the end.
         let mut add_block = |v: LaneVector, s: Lane| {
             for (c, column) in block.iter_mut().enumerate() {
-                for (r, entry) in column.iter_mut().enumerate() {
+                for (r, entry) in column.iter_mut().enumerate().take(c + 1) {
                     *entry += v.0[r] * v.0[c] * s;
                 }
             }
@@ -1313,8 +1314,10 @@ fn cell_lanes_at<P: Positions + ?Sized>(
     }
     let mut out = Matrix::ZERO;
     for (c, column) in block.iter().enumerate() {
-        for (r, entry) in column.iter().enumerate() {
-            out.col_mut(c)[r] = entry.reduce_add();
+        for (r, entry) in column.iter().enumerate().take(c + 1) {
+            let sum = entry.reduce_add();
+            out.col_mut(c)[r] = sum;
+            out.col_mut(r)[c] = sum;
         }
     }
     (
