@@ -146,15 +146,25 @@ pub(crate) fn for_each_mut<T: Send>(items: &mut [T], f: impl Fn(usize, &mut T) +
 /// `[f(0), f(1), …, f(count − 1)]` (on rayon's threads when there are several chunks and
 /// threads).
 pub(crate) fn collect<T: Send>(count: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    collect_in(count, CHUNK, f)
+}
+
+/// [`collect`] in chunks of `chunk` items, for items that each cost many terms.
+pub(crate) fn collect_in<T: Send>(
+    count: usize,
+    chunk: usize,
+    f: impl Fn(usize) -> T + Sync,
+) -> Vec<T> {
     #[cfg(feature = "parallel")]
-    if count > CHUNK && rayon::current_num_threads() > 1 {
+    if count > chunk && rayon::current_num_threads() > 1 {
         use rayon::prelude::*;
         return (0..count)
             .into_par_iter()
-            .with_min_len(CHUNK)
+            .with_min_len(chunk)
             .map(&f)
             .collect();
     }
+    let _ = chunk;
     (0..count).map(f).collect()
 }
 

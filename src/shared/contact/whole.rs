@@ -14,6 +14,7 @@
 use super::super::coupling::Substep;
 use super::super::math::{self, AngMatrix, AngVector, Real, Vector};
 use super::super::rapier::dynamics::RigidBodySet;
+use super::super::threads;
 use super::candidates::Candidate;
 use super::solve::Contact;
 
@@ -112,30 +113,30 @@ pub(crate) fn rigid_answer(
         linear,
         angular: inv_inertia * momentum,
     };
-    let mut rows: Vec<Row> = rows
-        .iter()
-        .map(|c| {
-            let cand = &candidates[c.candidate];
-            let arm = c.node_point(x) - centre;
-            let collider =
-                cand.anchored_velocity(c.point, c.anchor, at.s1, at.dt, at.motions, bodies);
-            let blow = (collider - linear).dot(c.normal) > impact;
-            Row {
-                arm,
-                lever: if blow {
-                    arm
-                } else {
-                    normal_lever(arm, c.normal, &outline)
-                },
-                normal: c.normal,
-                target: c.target,
-                collider,
-                friction: cand.friction,
-                normal_impulse: 0.0,
-                friction_impulse: Vector::ZERO,
-            }
-        })
-        .collect();
+    // Each row's lever scans the outline: the rows are set up on rayon's threads, in chunks
+    // of about a `CHUNK` of terms.
+    let chunk = (threads::CHUNK / outline.len().max(1)).max(1);
+    let mut rows: Vec<Row> = threads::collect_in(rows.len(), chunk, |r| {
+        let c = &rows[r];
+        let cand = &candidates[c.candidate];
+        let arm = c.node_point(x) - centre;
+        let collider = cand.anchored_velocity(c.point, c.anchor, at.s1, at.dt, at.motions, bodies);
+        let blow = (collider - linear).dot(c.normal) > impact;
+        Row {
+            arm,
+            lever: if blow {
+                arm
+            } else {
+                normal_lever(arm, c.normal, &outline)
+            },
+            normal: c.normal,
+            target: c.target,
+            collider,
+            friction: cand.friction,
+            normal_impulse: 0.0,
+            friction_impulse: Vector::ZERO,
+        }
+    });
     let mut body = start;
     let (linear0, angular0) = (body.linear, body.angular);
     for _ in 0..PASSES {

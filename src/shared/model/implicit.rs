@@ -699,15 +699,15 @@ impl Solve<'_> {
     ) -> Option<Vec<Rotation>> {
         let n = x.len();
         let (h, held, vertex) = (self.h, &self.held, &self.vertex);
-        reactions.clear();
-        reactions.extend((0..n).map(|i| {
+        let at: &[Vector] = x;
+        *reactions = threads::collect(n, |i| {
             if held[i] == Hold::Free {
                 return Vector::ZERO;
             }
             let inertia = self.masses[i] / (h * h);
             let inertial = self.ahead[i] + self.gravity * (h * h);
-            -vertex.newton(i, x, inertia, inertial).0
-        }));
+            -vertex.newton(i, at, inertia, inertial).0
+        });
         if translate && held.iter().all(|h| *h == Hold::Free) {
             // The energy does not change under a translation, so the best one is exact: the
             // centre of mass where inertia and gravity take it. A few sweeps cannot move a
