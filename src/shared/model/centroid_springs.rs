@@ -232,3 +232,59 @@ fn cell_forces<const N: usize>(
     }
     own.map(|f| f - reaction * inv_n)
 }
+
+/// Centroid springs have no implicit step: their terms couple a vertex to its cell's centroid,
+/// which the implicit step's term families do not cover.
+impl super::law::ElementLaw for CentroidSprings {
+    fn boxed_clone(&self) -> Box<dyn super::law::ElementLaw> {
+        Box::new(self.clone())
+    }
+
+    fn accumulate(
+        &mut self,
+        x: &[Vector],
+        v: &[Vector],
+        acc: &mut Accumulator,
+        _: Option<&super::volume::Volume>,
+    ) -> Real {
+        CentroidSprings::accumulate(self, x, v, acc);
+        Real::INFINITY
+    }
+
+    fn energy(&self, x: &[Vector]) -> Real {
+        self.elastic_energy(x)
+    }
+
+    fn constant_bounds(&self, bounds: &mut NodeBounds) {
+        CentroidSprings::constant_bounds(self, bounds);
+    }
+
+    #[cfg(feature = "parallel")]
+    fn edge_springs(&self) -> Option<&Springs> {
+        Some(&self.edges)
+    }
+
+    #[cfg(feature = "parallel")]
+    fn cost_per_cell(&self) -> usize {
+        5
+    }
+
+    #[cfg(feature = "parallel")]
+    fn varying(&self) -> super::law::Varying {
+        super::law::Varying::Nothing
+    }
+
+    #[cfg(feature = "parallel")]
+    fn evaluate(
+        &mut self,
+        (x, v): (&[Vector], &[Vector]),
+        spring_force: &mut [Vector],
+        slot_force: &mut [Vector],
+        _: &mut [Real],
+        _: Option<&super::volume::Volume>,
+    ) -> Real {
+        self.edges.evaluate(x, v, spring_force, &mut []);
+        self.evaluate_cells(x, v, slot_force);
+        Real::INFINITY
+    }
+}

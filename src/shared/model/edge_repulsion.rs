@@ -455,6 +455,79 @@ fn cell_terms(
     )
 }
 
+impl super::law::ElementLaw for EdgeRepulsion {
+    fn boxed_clone(&self) -> Box<dyn super::law::ElementLaw> {
+        Box::new(self.clone())
+    }
+
+    fn accumulate(
+        &mut self,
+        x: &[Vector],
+        v: &[Vector],
+        acc: &mut Accumulator,
+        volume: Option<&Volume>,
+    ) -> Real {
+        EdgeRepulsion::accumulate(self, x, v, acc, volume)
+    }
+
+    /// The volumetric term shares the repulsions' pass over the cells (their volume
+    /// gradients).
+    fn sums_volume(&self) -> bool {
+        true
+    }
+
+    fn energy(&self, x: &[Vector]) -> Real {
+        use super::super::threads::chunked_sum;
+        chunked_sum(self.edges.pairs.len(), |r| self.edges.energy_of(x, r))
+            + chunked_sum(self.h0.len() / SIMPLEX_ARITY, |r| self.cell_energy(x, r))
+    }
+
+    fn constant_bounds(&self, bounds: &mut NodeBounds) {
+        EdgeRepulsion::constant_bounds(self, bounds);
+    }
+
+    fn implicit_terms(&self) -> Option<super::law::ImplicitTerms<'_>> {
+        Some(super::law::ImplicitTerms {
+            springs: Some(&self.edges),
+            repulsion: Some(self),
+            shape: None,
+        })
+    }
+
+    #[cfg(any(test, feature = "parallel"))]
+    fn edge_repulsion(&self) -> Option<&EdgeRepulsion> {
+        Some(self)
+    }
+
+    #[cfg(feature = "parallel")]
+    fn edge_springs(&self) -> Option<&Springs> {
+        Some(&self.edges)
+    }
+
+    #[cfg(feature = "parallel")]
+    fn cost_per_cell(&self) -> usize {
+        20
+    }
+
+    #[cfg(feature = "parallel")]
+    fn varying(&self) -> super::law::Varying {
+        super::law::Varying::Cells
+    }
+
+    #[cfg(feature = "parallel")]
+    fn evaluate(
+        &mut self,
+        (x, v): (&[Vector], &[Vector]),
+        spring_force: &mut [Vector],
+        slot_force: &mut [Vector],
+        stiffness: &mut [Real],
+        volume: Option<&Volume>,
+    ) -> Real {
+        self.edges.evaluate(x, v, spring_force, &mut []);
+        self.evaluate_cells(x, v, slot_force, stiffness, volume)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::Accumulator;

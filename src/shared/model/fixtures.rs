@@ -4,7 +4,7 @@ use super::super::body::{Deformable, DeformableBuilder};
 use super::super::math::{Vector, DIM};
 use super::super::mesh::CellKind;
 use super::edge_repulsion::EdgeRepulsion;
-use super::{ElementModel, Elements};
+use super::ElementModel;
 
 /// A lattice of simplex edge-repulsion cells, `half` its half extents and `res` its nodes per
 /// axis.
@@ -18,8 +18,9 @@ pub(super) fn er_lattice(half: Vector, res: [usize; DIM]) -> Deformable {
 
 /// The edge-repulsion elements of a body built by [`er_lattice`].
 pub(super) fn er_of(body: &Deformable) -> &EdgeRepulsion {
-    match &body.state.elements.elements {
-        Elements::EdgeRepulsion(er) => er,
-        _ => unreachable!("an edge-repulsion body"),
-    }
+    body.state
+        .elements
+        .elements
+        .edge_repulsion()
+        .expect("an edge-repulsion body")
 }

@@ -69,7 +69,7 @@ use super::lanes::{self, each, Lane, LaneVector, LANES};
 use super::shape_matching::ShapeMatching;
 use super::springs::{Law, Springs};
 use super::volume::Volume;
-use super::{Elements, ModelState, Motion};
+use super::{ElementLaw, ModelState, Motion};
 
 /// Smallest height a line-searched step may leave a vertex at, over its rest height.
 pub const MIN_STEP_HEIGHT: Real = 0.1;
@@ -94,20 +94,14 @@ pub(crate) struct Incidence {
 impl Incidence {
     /// The incidence of `elements` over `nodes` nodes (`None` for a model without an implicit
     /// step).
-    fn of(elements: &Elements, volume: Option<&Volume>, nodes: usize) -> Option<Self> {
-        Some(match elements {
-            Elements::Springs(s) | Elements::NonlinearSprings(s) => {
-                let cells = volume.map(|v| (v.cells(), SIMPLEX_ARITY));
-                Self::build(nodes, Some(s), cells)
-            }
-            Elements::EdgeRepulsion(e) => {
-                Self::build(nodes, Some(&e.edges), Some((&e.cells, SIMPLEX_ARITY)))
-            }
-            Elements::ShapeMatching(s) => {
-                Self::build(nodes, None, Some((s.cell_indices(), s.arity())))
-            }
-            Elements::CentroidSprings(_) => return None,
-        })
+    fn of(elements: &dyn ElementLaw, volume: Option<&Volume>, nodes: usize) -> Option<Self> {
+        let terms = elements.implicit_terms()?;
+        let cells = match (terms.repulsion, terms.shape) {
+            (Some(e), _) => Some((&e.cells[..], SIMPLEX_ARITY)),
+            (None, Some(s)) => Some((s.cell_indices(), s.arity())),
+            (None, None) => volume.map(|v| (v.cells(), SIMPLEX_ARITY)),
+        };
+        Some(Self::build(nodes, terms.springs, cells))
     }
 
     fn build(nodes: usize, springs: Option<&Springs>, cells: Option<(&[u32], usize)>) -> Self {
@@ -368,7 +362,7 @@ pub(crate) struct StepInput<'a> {
 impl ModelState {
     /// Whether this model has an implicit step.
     pub fn has_implicit(&self) -> bool {
-        !matches!(self.elements, Elements::CentroidSprings(_))
+        self.elements.implicit_terms().is_some()
     }
 
     /// Whether the step's energy is convex (shape matching's, its rotations held): only then
@@ -376,7 +370,7 @@ impl ModelState {
     /// springs and edge repulsion, whose energies are not, a pile of fifty cubes in a bowl
     /// exploded (`scenes pile --bodies 50 --integrator implicit`).
     pub fn has_convex_implicit(&self) -> bool {
-        matches!(self.elements, Elements::ShapeMatching(_))
+        self.elements.convex_implicit()
     }
 
     /// One backward-Euler step (see the module docs): the end positions into `x`. Does
@@ -424,6 +418,8 @@ impl ModelState {
             volume,
             ..
         } = self;
+        let elements = &**elements;
+        let terms = elements.implicit_terms()?;
         let volume = volume.as_ref();
         let incidence = incidence
             .get_or_init(|| Incidence::of(elements, volume, n))
@@ -469,40 +465,36 @@ impl ModelState {
             x0,
             h,
         };
-        match elements {
-            Elements::Springs(s) | Elements::NonlinearSprings(s) => vertex.springs = Some(s),
-            Elements::EdgeRepulsion(e) => {
-                vertex.springs = Some(&e.edges);
-                vertex.er = Some(e);
-                let upright = |c: usize, x: &[Vector]| cell_upright(e, c, &cell_positions(e, c, x));
+        vertex.springs = terms.springs;
+        if let Some(e) = terms.repulsion {
+            vertex.er = Some(e);
+            let upright = |c: usize, x: &[Vector]| cell_upright(e, c, &cell_positions(e, c, x));
+            let start = Start {
+                x0,
+                given: input.held,
+            };
+            start.fix(&e.cells, SIMPLEX_ARITY, upright, x, &mut held);
+        }
+        if let Some(sm) = terms.shape {
+            if sm.arity() == SIMPLEX_ARITY {
+                let upright = |c: usize, x: &[Vector]| sm.volume_ratio(c, x) > MIN_STEP_VOLUME;
                 let start = Start {
                     x0,
                     given: input.held,
                 };
-                start.fix(&e.cells, SIMPLEX_ARITY, upright, x, &mut held);
+                start.fix(sm.cell_indices(), SIMPLEX_ARITY, upright, x, &mut held);
             }
-            Elements::ShapeMatching(sm) => {
-                if sm.arity() == SIMPLEX_ARITY {
-                    let upright = |c: usize, x: &[Vector]| sm.volume_ratio(c, x) > MIN_STEP_VOLUME;
-                    let start = Start {
-                        x0,
-                        given: input.held,
-                    };
-                    start.fix(sm.cell_indices(), SIMPLEX_ARITY, upright, x, &mut held);
-                }
-                // The rotations are fitted once, where the sweeps start (inertia carries a
-                // turning cell's fit on), and held: refitting before every sweep cost 1.8× as
-                // much for the same fall.
-                let mut rotations = sm.rotations().to_vec();
-                let start = shape_residuals(sm, x0, &rotations);
-                sm.refit(x, &mut rotations);
-                vertex.shape = Some(Shape {
-                    cells: sm,
-                    rotations,
-                    start,
-                });
-            }
-            Elements::CentroidSprings(_) => return None,
+            // The rotations are fitted once, where the sweeps start (inertia carries a
+            // turning cell's fit on), and held: refitting before every sweep cost 1.8× as
+            // much for the same fall.
+            let mut rotations = sm.rotations().to_vec();
+            let start = shape_residuals(sm, x0, &rotations);
+            sm.refit(x, &mut rotations);
+            vertex.shape = Some(Shape {
+                cells: sm,
+                rotations,
+                start,
+            });
         }
         Some(Solve {
             vertex,
@@ -518,7 +510,7 @@ impl ModelState {
     /// Refits shape matching's rotations at `x` (a step that moved the nodes past where its
     /// sweeps fitted them; the elastic energy and the next fit read them).
     pub(crate) fn refit_rotations(&mut self, x: &[Vector]) {
-        if let Elements::ShapeMatching(sm) = &mut self.elements {
+        if let Some(sm) = self.elements.shape_mut() {
             let mut rotations = sm.rotations().to_vec();
             sm.refit(x, &mut rotations);
             sm.rotations_mut().copy_from_slice(&rotations);
@@ -527,7 +519,7 @@ impl ModelState {
 
     /// Keeps the rotations a finished step fitted (shape matching's warm start).
     pub(crate) fn keep_rotations(&mut self, rotations: Option<Vec<Rotation>>) {
-        if let (Some(rotations), Elements::ShapeMatching(sm)) = (rotations, &mut self.elements) {
+        if let (Some(rotations), Some(sm)) = (rotations, self.elements.shape_mut()) {
             sm.rotations_mut().copy_from_slice(&rotations);
         }
     }
@@ -774,7 +766,7 @@ const START_FRACTIONS: [Real; 3] = [1.0, 0.5, 0.0];
 /// sweeps' own objective): a few sweeps cannot undo a start that pressed the free nodes into
 /// the held ones (`docs/ARCHITECTURE.md` §4.2).
 fn start_scaled(
-    elements: &Elements,
+    elements: &dyn ElementLaw,
     volume: Option<&Volume>,
     input: &StepInput<'_>,
     (held, y): (&[Hold], &[Vector]),
@@ -816,7 +808,7 @@ const RINGING: Real = 0.01;
 /// ball's first implicit step after an impact's explicit substeps started 2 cm cells a
 /// centimetre out of shape), and a few sweeps leave most of that stored.
 fn start_rigid(
-    elements: &Elements,
+    elements: &dyn ElementLaw,
     volume: Option<&Volume>,
     input: &StepInput<'_>,
     y: &[Vector],
@@ -1432,11 +1424,9 @@ mod tests {
                 .model(ElementModel::EdgeRepulsion)
                 .build()
                 .unwrap();
-            let Elements::EdgeRepulsion(er) = &body.state.elements.elements else {
-                unreachable!()
-            };
+            let er = super::super::fixtures::er_of(&body);
             let n = body.state.positions.len();
-            let incidence = Incidence::of(&body.state.elements.elements, None, n).unwrap();
+            let incidence = Incidence::of(&*body.state.elements.elements, None, n).unwrap();
             let slab = incidence.slab;
             assert_eq!(slab < n, slabbed, "res {res}: slab {slab} of {n} nodes");
             if !slabbed {
@@ -1505,7 +1495,7 @@ mod tests {
         let elements = &body.state.elements;
         let er = super::super::fixtures::er_of(&body);
         let volume = elements.volume.as_ref();
-        let incidence = Incidence::of(&elements.elements, volume, x.len()).unwrap();
+        let incidence = Incidence::of(&*elements.elements, volume, x.len()).unwrap();
         check(er, volume, &incidence, &x);
     }
 

@@ -60,6 +60,7 @@ mod fixtures;
 pub mod hessian;
 mod implicit;
 mod lanes;
+mod law;
 pub mod nonlinear_springs;
 #[cfg(feature = "parallel")]
 mod parallel;
@@ -72,6 +73,7 @@ pub mod springs;
 mod tests;
 pub mod volume;
 
+pub(crate) use law::ElementLaw;
 pub(crate) use slack::Slack;
 
 pub(crate) use implicit::{Hold, Solve, StepInput, MIN_STEP_VOLUME};
@@ -227,21 +229,12 @@ impl NodeBounds {
 /// shape matching, 8 with edge repulsion, 11 with centroid springs and 18 with springs.
 pub const PARALLEL_MIN_WORK: usize = 1 << 15;
 
-/// The built, model-specific element data (rest data and any per-cell state).
-#[derive(Clone, Debug)]
-pub(crate) enum Elements {
-    Springs(springs::Springs),
-    CentroidSprings(centroid_springs::CentroidSprings),
-    NonlinearSprings(springs::Springs),
-    EdgeRepulsion(edge_repulsion::EdgeRepulsion),
-    ShapeMatching(shape_matching::ShapeMatching),
-}
-
 /// A deformable's element model: its terms, the constant part of its node bounds and, with
 /// the `parallel` feature, the buffers of the two-pass evaluation.
 #[derive(Clone, Debug)]
 pub(crate) struct ModelState {
-    elements: Elements,
+    /// The model's terms: rest data and any per-cell state.
+    elements: Box<dyn ElementLaw>,
     bounds: NodeBounds,
     /// The volumetric term that sets Poisson's ratio, if the model takes one.
     volume: Option<volume::Volume>,
@@ -275,18 +268,18 @@ impl ModelState {
             scaled.material.young_modulus *= sigma;
         }
         let params = &scaled;
-        let elements = match model {
-            ElementModel::Springs => Elements::Springs(springs::Springs::build(
+        let elements: Box<dyn ElementLaw> = match model {
+            ElementModel::Springs => Box::new(springs::Springs::build(
                 mesh,
                 masses,
                 params,
                 springs::MATERIAL_SCALE,
                 springs::Law::Linear,
             )),
-            ElementModel::CentroidSprings => Elements::CentroidSprings(
-                centroid_springs::CentroidSprings::build(mesh, masses, params),
-            ),
-            ElementModel::NonlinearSprings => Elements::NonlinearSprings(springs::Springs::build(
+            ElementModel::CentroidSprings => Box::new(centroid_springs::CentroidSprings::build(
+                mesh, masses, params,
+            )),
+            ElementModel::NonlinearSprings => Box::new(springs::Springs::build(
                 mesh,
                 masses,
                 params,
@@ -300,7 +293,7 @@ impl ModelState {
                         kind: mesh.kind().name(),
                     });
                 }
-                Elements::EdgeRepulsion(edge_repulsion::EdgeRepulsion::build(mesh, masses, params))
+                Box::new(edge_repulsion::EdgeRepulsion::build(mesh, masses, params))
             }
             ElementModel::ShapeMatching { fit, damping } => {
                 if let RotationFit::Iterative(0) = fit {
@@ -310,7 +303,7 @@ impl ModelState {
                         expected: "at least one iteration",
                     });
                 }
-                Elements::ShapeMatching(shape_matching::ShapeMatching::build(
+                Box::new(shape_matching::ShapeMatching::build(
                     mesh,
                     params,
                     fit,
@@ -328,10 +321,10 @@ impl ModelState {
                 volume::Volume::build(mesh.cell_indices(), mesh.nodes(), kappa * young / sigma)
             });
         #[cfg(feature = "parallel")]
-        let split = parallel::Split::build_if_large(&elements, mesh);
+        let split = parallel::Split::build_if_large(&*elements, mesh);
         #[cfg(feature = "parallel")]
-        let slabs = match (&split, &elements) {
-            (Some(_), Elements::EdgeRepulsion(er)) => slabs::Slabs::of(er, mesh.nodes().len()),
+        let slabs = match (&split, elements.edge_repulsion()) {
+            (Some(_), Some(er)) => slabs::Slabs::of(er, mesh.nodes().len()),
             _ => None,
         };
         Ok(ModelState {
@@ -350,9 +343,8 @@ impl ModelState {
     /// own limiter allows (infinite when it has none).
     pub fn accumulate(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
         let limit = self.accumulate_elements(x, v, acc);
-        // Edge repulsion evaluates the volumetric term in its own pass over the cells.
         if let Some(volume) = &self.volume {
-            if !matches!(self.elements, Elements::EdgeRepulsion(_)) {
+            if !self.elements.sums_volume() {
                 volume.accumulate(x, acc);
             }
         }
@@ -361,7 +353,7 @@ impl ModelState {
 
     fn accumulate_elements(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
         #[cfg(feature = "parallel")]
-        if let (Some(slabs), Elements::EdgeRepulsion(er)) = (&self.slabs, &self.elements) {
+        if let (Some(slabs), Some(er)) = (&self.slabs, self.elements.edge_repulsion()) {
             // On any number of threads: the slabs' order is the body's, not the threads'.
             assert!(v.len() == x.len() && acc.force.len() == x.len());
             assert!(acc.stiffness.len() == x.len() && acc.damping.len() == x.len());
@@ -373,7 +365,7 @@ impl ModelState {
         if let Some(split) = &mut self.split {
             if rayon::current_num_threads() > 1 {
                 let volume = self.volume.as_ref();
-                return split.accumulate(&mut self.elements, volume, &self.bounds, x, v, acc);
+                return split.accumulate(&mut *self.elements, volume, &self.bounds, x, v, acc);
             }
         }
         self.accumulate_serial(x, v, acc)
@@ -389,21 +381,7 @@ impl ModelState {
         assert!(v.len() == x.len() && acc.force.len() == x.len());
         assert!(acc.stiffness.len() == x.len() && acc.damping.len() == x.len());
         self.bounds.add_to(acc);
-        match &mut self.elements {
-            Elements::Springs(s) | Elements::NonlinearSprings(s) => {
-                s.accumulate(x, v, acc);
-                Real::INFINITY
-            }
-            Elements::CentroidSprings(s) => {
-                s.accumulate(x, v, acc);
-                Real::INFINITY
-            }
-            Elements::EdgeRepulsion(s) => s.accumulate(x, v, acc, self.volume.as_ref()),
-            Elements::ShapeMatching(s) => {
-                s.accumulate(x, v, acc);
-                Real::INFINITY
-            }
-        }
+        self.elements.accumulate(x, v, acc, self.volume.as_ref())
     }
 
     /// The state the model carries from one substep to the next: the shape-based element's
@@ -411,25 +389,18 @@ impl ModelState {
     /// functions of the node state).
     #[cfg_attr(not(feature = "serde"), allow(dead_code))]
     pub fn warm_start(&self) -> &[Rotation] {
-        match &self.elements {
-            Elements::ShapeMatching(s) => s.rotations(),
-            _ => &[],
-        }
+        self.elements.rotations()
     }
 
     /// Restores [`ModelState::warm_start`]. `Err(expected length)` if the length is wrong.
     #[cfg_attr(not(feature = "serde"), allow(dead_code))]
     pub fn set_warm_start(&mut self, rotations: &[Rotation]) -> Result<(), usize> {
-        match &mut self.elements {
-            Elements::ShapeMatching(s) => s.set_rotations(rotations),
-            _ if rotations.is_empty() => Ok(()),
-            _ => Err(0),
-        }
+        self.elements.set_rotations(rotations)
     }
 
     /// Elastic (stored) energy at `x`.
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
-        elastic_energy(&self.elements, self.volume.as_ref(), x)
+        elastic_energy(&*self.elements, self.volume.as_ref(), x)
     }
 
     /// [`ModelState::elastic_energy`] at `x` (the same bits), with the cells' volume ratios
@@ -444,7 +415,7 @@ impl ModelState {
             |(e1, r1), (e2, r2)| (e1 + e2, r1.and(r2)),
         )
         .unwrap_or((0.0, volume::Ratios::NONE));
-        (energy + elements_energy(&self.elements, x), Some(ratios))
+        (energy + self.elements.energy(x), Some(ratios))
     }
 }
 
@@ -465,27 +436,15 @@ pub(crate) fn squashed(x: &[Vector], height: Real, shear: Real) -> Vec<Vector> {
 /// Elastic (stored) energy of `elements` and the volumetric term at `x`, summed by
 /// [`threads::chunked_sum`] (on rayon's threads for a large body, the same bits whatever the
 /// thread count).
-fn elastic_energy(elements: &Elements, volume: Option<&volume::Volume>, x: &[Vector]) -> Real {
+fn elastic_energy(
+    elements: &dyn ElementLaw,
+    volume: Option<&volume::Volume>,
+    x: &[Vector],
+) -> Real {
     use super::threads::chunked_sum;
     volume.map_or(0.0, |v| {
         chunked_sum(v.cells().len() / SIMPLEX_ARITY, |r| v.energy_of(x, r))
-    }) + elements_energy(elements, x)
-}
-
-/// Elastic (stored) energy of `elements` at `x`, without the volumetric term.
-fn elements_energy(elements: &Elements, x: &[Vector]) -> Real {
-    use super::threads::chunked_sum;
-    match elements {
-        Elements::Springs(s) | Elements::NonlinearSprings(s) => {
-            chunked_sum(s.pairs.len(), |r| s.energy_of(x, r))
-        }
-        Elements::CentroidSprings(s) => s.elastic_energy(x),
-        Elements::EdgeRepulsion(s) => {
-            chunked_sum(s.edges.pairs.len(), |r| s.edges.energy_of(x, r))
-                + chunked_sum(s.h0.len() / SIMPLEX_ARITY, |r| s.cell_energy(x, r))
-        }
-        Elements::ShapeMatching(s) => chunked_sum(s.rotations().len(), |r| s.energy_of(x, r)),
-    }
+    }) + elements.energy(x)
 }
 
 /// The Poisson's ratio of a model's lattice (`Mesh::cuboid`'s mirrored Kuhn simplices, small
@@ -508,40 +467,11 @@ pub fn lattice_poisson(model: ElementModel, kind: CellKind) -> Option<Real> {
     }
 }
 
-impl Elements {
-    /// The edge springs, for the models that have them.
-    #[cfg(feature = "parallel")]
-    fn springs(&self) -> Option<&springs::Springs> {
-        match self {
-            Elements::Springs(s) | Elements::NonlinearSprings(s) => Some(s),
-            Elements::CentroidSprings(s) => Some(&s.edges),
-            Elements::EdgeRepulsion(s) => Some(&s.edges),
-            Elements::ShapeMatching(_) => None,
-        }
-    }
-
-    /// The cost of a serial force evaluation in linear-spring evaluations (see
-    /// [`PARALLEL_MIN_WORK`]).
-    #[cfg(feature = "parallel")]
-    fn work(&self, cells: usize) -> usize {
-        let per_cell = match self {
-            Elements::Springs(_) | Elements::NonlinearSprings(_) => 0,
-            Elements::CentroidSprings(_) => 5,
-            Elements::EdgeRepulsion(_) => 20,
-            Elements::ShapeMatching(_) => 30,
-        };
-        self.springs().map_or(0, |s| s.pairs.len()) + per_cell * cells
-    }
-
-    /// Adds every term's state-independent bounds into `bounds`.
-    fn constant_bounds(&self, bounds: &mut NodeBounds) {
-        match self {
-            Elements::Springs(s) | Elements::NonlinearSprings(s) => s.constant_bounds(bounds),
-            Elements::CentroidSprings(s) => s.constant_bounds(bounds),
-            Elements::EdgeRepulsion(s) => s.constant_bounds(bounds),
-            Elements::ShapeMatching(s) => s.constant_bounds(bounds),
-        }
-    }
+/// The cost of a serial force evaluation of `elements` in linear-spring evaluations (see
+/// [`PARALLEL_MIN_WORK`]).
+#[cfg(feature = "parallel")]
+fn work(elements: &dyn ElementLaw, cells: usize) -> usize {
+    elements.edge_springs().map_or(0, |s| s.pairs.len()) + elements.cost_per_cell() * cells
 }
 
 // The nonlinear springs' constant is half the linear springs' (their rest stiffness is 2k).

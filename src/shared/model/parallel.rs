@@ -6,8 +6,9 @@ use rayon::prelude::*;
 
 use super::super::math::{Real, Vector};
 use super::super::mesh::Mesh;
+use super::law::Varying;
 use super::volume::Volume;
-use super::{Accumulator, Elements, NodeBounds, PARALLEL_MIN_WORK};
+use super::{Accumulator, ElementLaw, NodeBounds, PARALLEL_MIN_WORK};
 
 /// Springs (and nodes) per rayon task: enough work per task that splitting costs little,
 /// few enough that the threads get several tasks each on the meshes that split.
@@ -76,28 +77,30 @@ pub(crate) struct Split {
 impl Split {
     /// The split evaluation of `elements` when the model costs enough to gain from it
     /// ([`PARALLEL_MIN_WORK`]).
-    pub fn build_if_large(elements: &Elements, mesh: &Mesh) -> Option<Self> {
-        (elements.work(mesh.num_cells()) >= PARALLEL_MIN_WORK).then(|| Split::build(elements, mesh))
+    pub fn build_if_large(elements: &dyn ElementLaw, mesh: &Mesh) -> Option<Self> {
+        (super::work(elements, mesh.num_cells()) >= PARALLEL_MIN_WORK)
+            .then(|| Split::build(elements, mesh))
     }
 
     /// The split evaluation of `elements` (buffers and incidence).
-    pub fn build(elements: &Elements, mesh: &Mesh) -> Self {
+    pub fn build(elements: &dyn ElementLaw, mesh: &Mesh) -> Self {
         let cells = mesh.cell_indices();
-        let springs = elements.springs();
+        let springs = elements.edge_springs();
         let spring_entries = 2 * springs.map_or(0, |s| s.pairs.len());
-        let slots = match elements {
-            Elements::Springs(_) | Elements::NonlinearSprings(_) => 0,
-            _ => cells.len(),
+        let slots = if elements.cell_slots() {
+            cells.len()
+        } else {
+            0
         };
         let entries = spring_entries + slots;
         let nodes = Incidence::build(mesh.nodes().len(), entries, |e| match springs {
             Some(s) if e < spring_entries => s.pairs[e >> 1][e & 1] as usize,
             _ => cells[e - spring_entries] as usize,
         });
-        let stiffness_from = match elements {
-            Elements::NonlinearSprings(_) => 0,
-            Elements::EdgeRepulsion(_) | Elements::ShapeMatching(_) => spring_entries,
-            _ => entries,
+        let stiffness_from = match elements.varying() {
+            Varying::Springs => 0,
+            Varying::Cells => spring_entries,
+            Varying::Nothing => entries,
         };
         Split {
             nodes,
@@ -112,7 +115,7 @@ impl Split {
     /// constant `bounds`. Returns the model's limiter.
     pub fn accumulate(
         &mut self,
-        elements: &mut Elements,
+        elements: &mut dyn ElementLaw,
         volume: Option<&Volume>,
         bounds: &NodeBounds,
         x: &[Vector],
@@ -123,25 +126,7 @@ impl Split {
         assert!(acc.stiffness.len() == x.len() && acc.damping.len() == x.len());
         let (spring_force, slot_force) = self.force.split_at_mut(self.spring_entries / 2);
         let stiffness = &mut self.stiffness;
-        let limit = match elements {
-            Elements::Springs(s) | Elements::NonlinearSprings(s) => {
-                s.evaluate(x, v, spring_force, stiffness.as_chunks_mut::<2>().0);
-                Real::INFINITY
-            }
-            Elements::CentroidSprings(s) => {
-                s.edges.evaluate(x, v, spring_force, &mut []);
-                s.evaluate_cells(x, v, slot_force);
-                Real::INFINITY
-            }
-            Elements::EdgeRepulsion(s) => {
-                s.edges.evaluate(x, v, spring_force, &mut []);
-                s.evaluate_cells(x, v, slot_force, stiffness, volume)
-            }
-            Elements::ShapeMatching(s) => {
-                s.evaluate_cells(x, v, slot_force, stiffness);
-                Real::INFINITY
-            }
-        };
+        let limit = elements.evaluate((x, v), spring_force, slot_force, stiffness, volume);
         self.gather(bounds, acc);
         limit
     }

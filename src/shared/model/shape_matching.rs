@@ -467,3 +467,80 @@ impl ShapeMatching {
         (self.k[cell], self.c[cell])
     }
 }
+
+impl super::law::ElementLaw for ShapeMatching {
+    fn boxed_clone(&self) -> Box<dyn super::law::ElementLaw> {
+        Box::new(self.clone())
+    }
+
+    fn accumulate(
+        &mut self,
+        x: &[Vector],
+        v: &[Vector],
+        acc: &mut Accumulator,
+        _: Option<&super::volume::Volume>,
+    ) -> Real {
+        ShapeMatching::accumulate(self, x, v, acc);
+        Real::INFINITY
+    }
+
+    fn energy(&self, x: &[Vector]) -> Real {
+        threads::chunked_sum(self.rotations.len(), |r| self.energy_of(x, r))
+    }
+
+    fn constant_bounds(&self, bounds: &mut NodeBounds) {
+        ShapeMatching::constant_bounds(self, bounds);
+    }
+
+    fn rotations(&self) -> &[Rotation] {
+        ShapeMatching::rotations(self)
+    }
+
+    fn set_rotations(&mut self, rotations: &[Rotation]) -> Result<(), usize> {
+        ShapeMatching::set_rotations(self, rotations)
+    }
+
+    fn implicit_terms(&self) -> Option<super::law::ImplicitTerms<'_>> {
+        Some(super::law::ImplicitTerms {
+            shape: Some(self),
+            ..Default::default()
+        })
+    }
+
+    /// Its rotations held, each cell's energy is quadratic in its vertices.
+    fn convex_implicit(&self) -> bool {
+        true
+    }
+
+    fn shape_mut(&mut self) -> Option<&mut ShapeMatching> {
+        Some(self)
+    }
+
+    #[cfg(feature = "parallel")]
+    fn edge_springs(&self) -> Option<&super::springs::Springs> {
+        None
+    }
+
+    #[cfg(feature = "parallel")]
+    fn cost_per_cell(&self) -> usize {
+        30
+    }
+
+    #[cfg(feature = "parallel")]
+    fn varying(&self) -> super::law::Varying {
+        super::law::Varying::Cells
+    }
+
+    #[cfg(feature = "parallel")]
+    fn evaluate(
+        &mut self,
+        (x, v): (&[Vector], &[Vector]),
+        _: &mut [Vector],
+        slot_force: &mut [Vector],
+        stiffness: &mut [Real],
+        _: Option<&super::volume::Volume>,
+    ) -> Real {
+        self.evaluate_cells(x, v, slot_force, stiffness);
+        Real::INFINITY
+    }
+}

@@ -279,3 +279,71 @@ fn term<const NONLINEAR: bool>(
         (linear_force(x[i], x[j], v[i], v[j], l0, k, c), 0.0)
     }
 }
+
+impl super::law::ElementLaw for Springs {
+    fn boxed_clone(&self) -> Box<dyn super::law::ElementLaw> {
+        Box::new(self.clone())
+    }
+
+    fn accumulate(
+        &mut self,
+        x: &[Vector],
+        v: &[Vector],
+        acc: &mut Accumulator,
+        _: Option<&super::volume::Volume>,
+    ) -> Real {
+        Springs::accumulate(self, x, v, acc);
+        Real::INFINITY
+    }
+
+    fn energy(&self, x: &[Vector]) -> Real {
+        super::super::threads::chunked_sum(self.pairs.len(), |r| self.energy_of(x, r))
+    }
+
+    fn constant_bounds(&self, bounds: &mut NodeBounds) {
+        Springs::constant_bounds(self, bounds);
+    }
+
+    fn implicit_terms(&self) -> Option<super::law::ImplicitTerms<'_>> {
+        Some(super::law::ImplicitTerms {
+            springs: Some(self),
+            ..Default::default()
+        })
+    }
+
+    #[cfg(feature = "parallel")]
+    fn edge_springs(&self) -> Option<&Springs> {
+        Some(self)
+    }
+
+    #[cfg(feature = "parallel")]
+    fn cost_per_cell(&self) -> usize {
+        0
+    }
+
+    #[cfg(feature = "parallel")]
+    fn cell_slots(&self) -> bool {
+        false
+    }
+
+    #[cfg(feature = "parallel")]
+    fn varying(&self) -> super::law::Varying {
+        match self.law {
+            Law::Linear => super::law::Varying::Nothing,
+            Law::Nonlinear => super::law::Varying::Springs,
+        }
+    }
+
+    #[cfg(feature = "parallel")]
+    fn evaluate(
+        &mut self,
+        (x, v): (&[Vector], &[Vector]),
+        spring_force: &mut [Vector],
+        _: &mut [Vector],
+        stiffness: &mut [Real],
+        _: Option<&super::volume::Volume>,
+    ) -> Real {
+        Springs::evaluate(self, x, v, spring_force, stiffness.as_chunks_mut::<2>().0);
+        Real::INFINITY
+    }
+}

@@ -88,7 +88,7 @@ fn serial_and_split(
 ) -> (Vec<Vec<u32>>, Vec<Vec<u32>>) {
     let (mut serial, mesh, mut x, v) = deformed(model, kind);
     let mut parallel = serial.clone();
-    let mut split = Split::build(&parallel.elements, &mesh);
+    let mut split = Split::build(&*parallel.elements, &mesh);
     let n = x.len();
     let (mut a, mut b) = (Vec::new(), Vec::new());
     for _ in 0..3 {
@@ -99,7 +99,7 @@ fn serial_and_split(
         let limit = pool.install(|| {
             let volume = parallel.volume.as_ref();
             split.accumulate(
-                &mut parallel.elements,
+                &mut *parallel.elements,
                 volume,
                 &parallel.bounds,
                 &x,
