@@ -135,6 +135,14 @@ pub enum BuildError {
         /// The accepted range, in words.
         expected: &'static str,
     },
+    /// Plastic flow was asked of a model or cell kind that has none.
+    #[error("the {model} model has no plastic flow on {kind} cells: plasticity needs edge repulsion or shape matching on simplex cells")]
+    NoPlasticity {
+        /// Model name.
+        model: &'static str,
+        /// Cell kind name.
+        kind: &'static str,
+    },
     /// The element model cannot be built on this cell kind.
     #[error("the {model} model needs simplex cells (triangles / tetrahedra), but the mesh has {kind} cells; build the lattice with CellKind::Simplex")]
     UnsupportedCells {

@@ -53,6 +53,80 @@ impl Default for Material {
     }
 }
 
+/// Which strains flow in [`Plasticity`].
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Default)]
+pub enum FlowIn {
+    /// Stretching and compression alike (the default).
+    #[default]
+    Both,
+    /// Stretching only (a cell compressed past yield springs back).
+    Tension,
+    /// Compression only (clay that keeps a dent but not a pull).
+    Compression,
+}
+
+/// Plastic flow: a cell strained past `yield_strain` along a principal direction has its rest
+/// shape stretched along that direction, so that a body bent or crushed past yield keeps a set
+/// (edge repulsion and shape matching on simplex cells; `docs/ARCHITECTURE.md` §3.6).
+///
+/// Strains are logarithmic (Hencky): `ln λ` of a principal stretch `λ` of the cell's elastic
+/// deformation (its shape against its current rest shape). A bar stretched to `λ` and
+/// released, flowing instantly, keeps `ln λ − yield_strain`.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Plasticity {
+    /// The elastic strain a cell bears before it flows (≥ 0).
+    pub yield_strain: Real,
+    /// How fast the strain past yield flows, 1/s: a step of `dt` flows `1 − e^(−rate·dt)` of it.
+    /// `Real::INFINITY` flows it all at once; a small rate creeps.
+    pub flow_rate: Real,
+    /// The largest plastic strain a cell may take along any direction (> 0, finite): its rest
+    /// shape is never stretched past `e^max` nor squashed below `e^(−max)` of its built shape,
+    /// so it never goes flat.
+    pub max_strain: Real,
+    /// Which strains flow.
+    pub flow: FlowIn,
+}
+
+impl Plasticity {
+    /// Checks the parameters.
+    pub(crate) fn validate(&self) -> Result<(), BuildError> {
+        let check = |name, value: Real, ok: bool, expected| {
+            if ok {
+                Ok(())
+            } else {
+                Err(BuildError::InvalidParameter {
+                    name,
+                    value,
+                    expected,
+                })
+            }
+        };
+        let y = self.yield_strain;
+        check(
+            "yield_strain",
+            y,
+            y.is_finite() && y >= 0.0,
+            "a finite strain of at least 0",
+        )?;
+        let r = self.flow_rate;
+        check(
+            "flow_rate",
+            r,
+            r > 0.0,
+            "a rate above 0 (1/s; infinite: instant)",
+        )?;
+        let m = self.max_strain;
+        check(
+            "max_strain",
+            m,
+            m.is_finite() && m > 0.0,
+            "a finite strain above 0",
+        )
+    }
+}
+
 /// Where element stiffness comes from.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq, Default)]

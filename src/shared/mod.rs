@@ -34,7 +34,7 @@ pub use embedding::Embedding;
 pub use error::BuildError;
 pub use events::{ChannelEventCollector, DeformableContactEvent, DeformableEventHandler};
 pub use integrator::{Integrator, AUTO_GLOBAL_ITERATIONS, AUTO_SUBSTEPS, GLOBAL_SUBSTEPS};
-pub use material::{Material, Stiffness};
+pub use material::{FlowIn, Material, Plasticity, Stiffness};
 pub use mesh::{CellKind, Mesh, MeshWarning};
 pub use model::{ElementModel, RotationFit, ShapeDamping};
 pub use pipeline::{DeformablePipeline, PipelineSettings, RigidSets};

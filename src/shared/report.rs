@@ -13,6 +13,9 @@ pub struct DeformableReport {
     pub elastic_energy: Real,
     /// Gravitational potential energy `−Σ m g·x` (zero at the origin), J.
     pub gravity_energy: Real,
+    /// Elastic energy released by plastic flow at the end of the step (the stored energy at
+    /// the step's end positions before the flow, less after), J: energy the body dissipated.
+    pub plastic_dissipation: Real,
     /// Number of nodes.
     pub nodes: usize,
     /// Number of cells.

@@ -46,7 +46,8 @@
 //!
 //! Saved, per deformable: the rest mesh's nodes, cells and cell kind; the element model,
 //! material and stiffness form; node positions and velocities; the shape-based element's
-//! per-cell warm-start rotations; the element forces and stiffness/damping bounds of the last
+//! per-cell warm-start rotations; a plastic body's flow parameters and each cell's rest
+//! vertices (the rest data derived from them is rebuilt); the element forces and stiffness/damping bounds of the last
 //! evaluation with the flag that says whether they are still current, and the crossing
 //! limiter; the contact material (coefficients, combine rules, collision groups); gravity
 //! scale; deformation damping rate; bindings to rigid bodies; contacts and touched colliders of the last step (they
@@ -94,7 +95,7 @@ mod imp {
     use super::super::contact::{ContactMaterial, ContactPoint};
     use super::super::embedding::Embedding;
     use super::super::integrator::{MidpointCarry, MidpointState};
-    use super::super::material::{Material, Resolved, Stiffness};
+    use super::super::material::{Material, Plasticity, Resolved, Stiffness};
     use super::super::math::{Real, Rotation, Vector};
     use super::super::mesh::{CellKind, Mesh};
     use super::super::model::{Accumulator, ElementModel, ModelState};
@@ -167,6 +168,9 @@ mod imp {
         /// The render mesh (absent in older snapshots: none).
         #[serde(default)]
         render: Option<Cow<'a, Embedding>>,
+        /// Plastic flow and each cell's rest vertices (absent in older snapshots: none).
+        #[serde(default)]
+        plastic: Option<(Plasticity, Cow<'a, [Vector]>)>,
     }
 
     impl Serialize for Deformable {
@@ -197,6 +201,11 @@ mod imp {
                 still_time: self.activation.still_time,
                 user_data: self.user_data,
                 midpoint: Some(self.step.midpoint.carry()),
+                plastic: self
+                    .state
+                    .elements
+                    .plasticity()
+                    .map(|p| (p, Cow::Borrowed(self.state.elements.plastic_rest()))),
             }
             .serialize(s)
         }
@@ -231,8 +240,17 @@ mod imp {
                 &rest.masses,
                 &rest.params,
                 Rotation::IDENTITY,
+                self.plastic.as_ref().map(|(p, _)| *p),
             )
             .map_err(|e| e.to_string())?;
+            if let Some((_, cells)) = &self.plastic {
+                elements.set_plastic_rest(cells).map_err(|expected| {
+                    format!(
+                        "{} plastic rest vertices, expected {expected} (finite)",
+                        cells.len()
+                    )
+                })?;
+            }
             elements
                 .set_warm_start(&self.warm_start)
                 .map_err(|expected| {

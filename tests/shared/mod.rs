@@ -30,6 +30,7 @@ mod metrics;
 mod parallel;
 mod pinch;
 mod pipeline;
+mod plasticity;
 mod poisson;
 mod properties;
 mod query;

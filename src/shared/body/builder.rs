@@ -3,7 +3,7 @@
 use super::super::attach::Bindings;
 use super::super::contact::ContactMaterial;
 use super::super::error::BuildError;
-use super::super::material::{Material, Resolved, Stiffness};
+use super::super::material::{Material, Plasticity, Resolved, Stiffness};
 use super::super::math::{Real, Rotation, Vector, DIM};
 use super::super::mesh::{CellKind, Mesh};
 use super::super::model::{Accumulator, ElementModel, ModelState};
@@ -30,6 +30,7 @@ pub struct DeformableBuilder {
     model: ElementModel,
     material: Material,
     stiffness: Stiffness,
+    plasticity: Option<Plasticity>,
     translation: Vector,
     rotation: Rotation,
     linvel: Vector,
@@ -69,6 +70,7 @@ impl DeformableBuilder {
             model: ElementModel::EdgeRepulsion,
             material: Material::default(),
             stiffness: Stiffness::FromMaterial,
+            plasticity: None,
             translation: Vector::ZERO,
             rotation: Rotation::IDENTITY,
             linvel: Vector::ZERO,
@@ -108,6 +110,14 @@ impl DeformableBuilder {
     /// The stiffness form (default: from the material).
     pub fn stiffness(mut self, stiffness: Stiffness) -> Self {
         self.stiffness = stiffness;
+        self
+    }
+
+    /// Plastic flow (default: none, a purely elastic body): edge repulsion and shape matching
+    /// on simplex cells; [`DeformableBuilder::build`] refuses it for the other models and for
+    /// bad parameters.
+    pub fn plasticity(mut self, plasticity: Plasticity) -> Self {
+        self.plasticity = Some(plasticity);
         self
     }
 
@@ -293,8 +303,14 @@ impl DeformableBuilder {
 
         let n = mesh.nodes().len();
         let rest = Rest::new(mesh, self.model, params);
-        let elements =
-            ModelState::build(self.model, &rest.mesh, &rest.masses, &rest.params, rotation)?;
+        let elements = ModelState::build(
+            self.model,
+            &rest.mesh,
+            &rest.masses,
+            &rest.params,
+            rotation,
+            self.plasticity,
+        )?;
         let positions: Vec<Vector> = rest
             .mesh
             .nodes()

@@ -4,7 +4,7 @@ use super::attach::{self, AttachError, Attachment, Bindings};
 use super::contact::{ContactMaterial, ContactPoint};
 use super::embedding::Embedding;
 use super::error::BuildError;
-use super::material::{Material, Stiffness};
+use super::material::{Material, Plasticity, Stiffness};
 use super::math::{self, AngVector, Real, Vector, DIM};
 use super::mesh::Mesh;
 use super::model::volume::Ratios;
@@ -214,6 +214,22 @@ impl Deformable {
             (memo.energy, memo.ratios) = (energy, ratios);
         }
         (energy, ratios)
+    }
+
+    /// Flows the cells strained past yield over a step of `dt` (plastic bodies only); returns
+    /// the elastic energy released. The forces and the energy measured before are stale after
+    /// a flow.
+    pub(crate) fn flow(&mut self, dt: Real) -> Option<Real> {
+        let released = self.state.elements.flow(&self.state.positions, dt)?;
+        self.step.forces_valid = false;
+        self.step.energy_memo.at.clear();
+        Some(released)
+    }
+
+    /// The body's plastic flow ([`DeformableBuilder::plasticity`](super::DeformableBuilder::plasticity)),
+    /// if it flows.
+    pub fn plasticity(&self) -> Option<Plasticity> {
+        self.state.elements.plasticity()
     }
 
     /// Number of cells that are collapsed or inverted now (quality ≤ 0).

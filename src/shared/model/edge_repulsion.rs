@@ -112,6 +112,23 @@ pub fn repulsion(c: Vector, facet: &[Vector], side: Real, h0: Real, k: Real) -> 
     }
 }
 
+/// Each vertex's side of its opposite facet (`±1`, the sign that makes the facet normal point
+/// to it) and its height above the facet, in the simplex `p`.
+fn heights(p: &[Vector; SIMPLEX_ARITY]) -> [(Real, Real); SIMPLEX_ARITY] {
+    std::array::from_fn(|a| {
+        let f = OPPOSITE[a];
+        let facet: [Vector; FACET_ARITY] = std::array::from_fn(|m| p[f[m]]);
+        let normal = math::facet_normal(&facet);
+        let c = p[a];
+        let side = if normal.dot(c - facet[0]) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        (side, (normal.dot(c - facet[0]) / normal.length()).abs())
+    })
+}
+
 /// ER elements on simplex cells.
 #[derive(Clone, Debug)]
 pub(crate) struct EdgeRepulsion {
@@ -168,18 +185,7 @@ impl EdgeRepulsion {
             out.sign.push(math::simplex_gradients(&rest).0.signum());
             let v = mesh.rest_volumes()[cell];
             let share = v / SIMPLEX_ARITY as Real;
-            for a in 0..SIMPLEX_ARITY {
-                let f = OPPOSITE[a];
-                let facet: [Vector; FACET_ARITY] =
-                    std::array::from_fn(|m| nodes[ids[f[m]] as usize]);
-                let normal = math::facet_normal(&facet);
-                let c = nodes[ids[a] as usize];
-                let side = if normal.dot(c - facet[0]) >= 0.0 {
-                    1.0
-                } else {
-                    -1.0
-                };
-                let h0 = (normal.dot(c - facet[0]) / normal.length()).abs();
+            for (side, h0) in heights(&rest) {
                 let material_k = MATERIAL_SCALE * params.material.young_modulus * share / (h0 * h0);
                 let (k, _) = params.k_c(material_k, params.material.density * share);
                 out.h0.push(h0);
@@ -474,6 +480,43 @@ impl super::law::ElementLaw for EdgeRepulsion {
     /// gradients).
     fn sums_volume(&self) -> bool {
         true
+    }
+
+    /// A flowed cell's rest heights from its rest vertices, and every edge's rest length the
+    /// mean of its length in the cells that share it (their rest shapes differ once they
+    /// flow).
+    fn set_rest(&mut self, rest: &[Vector], changed: &[u32]) {
+        for &cell in changed {
+            let cell = cell as usize;
+            let p: [Vector; SIMPLEX_ARITY] =
+                std::array::from_fn(|a| rest[cell * SIMPLEX_ARITY + a]);
+            for (a, (_, h0)) in heights(&p).into_iter().enumerate() {
+                self.h0[cell * SIMPLEX_ARITY + a] = h0;
+            }
+        }
+        let pairs = &self.edges.pairs;
+        let mut length = vec![0.0; pairs.len()];
+        let mut count = vec![0u32; pairs.len()];
+        for (cell, ids) in self.cells.chunks_exact(SIMPLEX_ARITY).enumerate() {
+            for a in 0..SIMPLEX_ARITY {
+                for b in a + 1..SIMPLEX_ARITY {
+                    let pair = [ids[a].min(ids[b]), ids[a].max(ids[b])];
+                    if let Ok(e) = pairs.binary_search(&pair) {
+                        let (pa, pb) = (
+                            rest[cell * SIMPLEX_ARITY + a],
+                            rest[cell * SIMPLEX_ARITY + b],
+                        );
+                        length[e] += pa.distance(pb);
+                        count[e] += 1;
+                    }
+                }
+            }
+        }
+        for ((rest, l), n) in self.edges.rest.iter_mut().zip(length).zip(count) {
+            if n > 0 {
+                *rest = l / n as Real;
+            }
+        }
     }
 
     fn energy(&self, x: &[Vector]) -> Real {

@@ -88,6 +88,13 @@ pub(crate) trait ElementLaw: std::fmt::Debug + Send + Sync {
         }
     }
 
+    /// Derives the rest data of the cells `changed` (in order) from every cell's rest
+    /// vertices `rest` (by slot), after plastic flow (`plastic.rs`); only models that flow
+    /// (edge repulsion, shape matching) are asked.
+    fn set_rest(&mut self, rest: &[Vector], changed: &[u32]) {
+        let _ = (rest, changed);
+    }
+
     /// The term families the implicit step sums for this model; `None`: the model keeps the
     /// explicit step.
     fn implicit_terms(&self) -> Option<ImplicitTerms<'_>> {

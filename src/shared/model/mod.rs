@@ -64,6 +64,7 @@ mod law;
 pub mod nonlinear_springs;
 #[cfg(feature = "parallel")]
 mod parallel;
+mod plastic;
 pub mod shape_matching;
 #[cfg(feature = "parallel")]
 mod slabs;
@@ -79,7 +80,7 @@ pub(crate) use slack::Slack;
 pub(crate) use implicit::{Hold, Solve, StepInput, MIN_STEP_VOLUME};
 
 use super::error::BuildError;
-use super::material::{Resolved, Stiffness};
+use super::material::{Plasticity, Resolved, Stiffness};
 use super::math::{self, AngVector, Real, Rotation, Vector, SIMPLEX_ARITY};
 use super::mesh::{CellKind, Mesh};
 
@@ -238,6 +239,8 @@ pub(crate) struct ModelState {
     bounds: NodeBounds,
     /// The volumetric term that sets Poisson's ratio, if the model takes one.
     volume: Option<volume::Volume>,
+    /// The cells' rest shapes under plastic flow, if the body flows.
+    plastic: Option<plastic::Plastic>,
     /// Which terms touch each node, for the implicit step (made when first needed).
     incidence: std::sync::OnceLock<Option<implicit::Incidence>>,
     #[cfg(feature = "parallel")]
@@ -255,7 +258,21 @@ impl ModelState {
         masses: &[Real],
         params: &Resolved,
         initial_rotation: Rotation,
+        plasticity: Option<Plasticity>,
     ) -> Result<Self, BuildError> {
+        if let Some(p) = plasticity {
+            p.validate()?;
+            let flows = matches!(
+                model,
+                ElementModel::EdgeRepulsion | ElementModel::ShapeMatching { .. }
+            );
+            if !flows || mesh.kind() != CellKind::Simplex {
+                return Err(BuildError::NoPlasticity {
+                    model: model.name(),
+                    kind: mesh.kind().name(),
+                });
+            }
+        }
         // Poisson's ratio: the model's own terms scaled by σ, plus a volumetric term.
         let poisson = match (params.stiffness, lattice_poisson(model, mesh.kind())) {
             (Stiffness::FromMaterial, Some(lattice)) => {
@@ -327,8 +344,11 @@ impl ModelState {
             (Some(_), Some(er)) => slabs::Slabs::of(er, mesh.nodes().len()),
             _ => None,
         };
+        let plastic =
+            plasticity.map(|p| plastic::Plastic::new(p, mesh.cell_indices(), mesh.nodes()));
         Ok(ModelState {
             volume,
+            plastic,
             #[cfg(feature = "parallel")]
             split: split.filter(|_| slabs.is_none()),
             #[cfg(feature = "parallel")]
@@ -396,6 +416,50 @@ impl ModelState {
     #[cfg_attr(not(feature = "serde"), allow(dead_code))]
     pub fn set_warm_start(&mut self, rotations: &[Rotation]) -> Result<(), usize> {
         self.elements.set_rotations(rotations)
+    }
+
+    /// The body's plastic flow, if it flows.
+    pub fn plasticity(&self) -> Option<Plasticity> {
+        self.plastic.as_ref().map(|p| p.params)
+    }
+
+    /// Each cell's rest vertices (by slot) under plastic flow; empty if the body does not
+    /// flow.
+    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
+    pub fn plastic_rest(&self) -> &[Vector] {
+        self.plastic.as_ref().map_or(&[], |p| p.rest())
+    }
+
+    /// Restores [`ModelState::plastic_rest`] and the rest data derived from it;
+    /// `Err(expected length)` if it does not fit the body.
+    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
+    pub fn set_plastic_rest(&mut self, rest: &[Vector]) -> Result<(), usize> {
+        let Some(plastic) = &mut self.plastic else {
+            return if rest.is_empty() { Ok(()) } else { Err(0) };
+        };
+        plastic.set_rest(rest)?;
+        let all: Vec<u32> = (0..(rest.len() / SIMPLEX_ARITY) as u32).collect();
+        self.elements.set_rest(plastic.rest(), &all);
+        if let Some(volume) = &mut self.volume {
+            volume.set_rest(plastic.rest(), &all);
+        }
+        Ok(())
+    }
+
+    /// Flows the cells strained past yield at `x` over a step of `dt` (`plastic.rs`); returns
+    /// the elastic energy the flow released, `None` if no cell flowed.
+    pub fn flow(&mut self, x: &[Vector], dt: Real) -> Option<Real> {
+        let plastic = self.plastic.as_mut()?;
+        let before = elastic_energy(&*self.elements, self.volume.as_ref(), x);
+        let changed = plastic.flow(x, dt);
+        if changed.is_empty() {
+            return None;
+        }
+        self.elements.set_rest(plastic.rest(), &changed);
+        if let Some(volume) = &mut self.volume {
+            volume.set_rest(plastic.rest(), &changed);
+        }
+        Some(before - elastic_energy(&*self.elements, self.volume.as_ref(), x))
     }
 
     /// Elastic (stored) energy at `x`.

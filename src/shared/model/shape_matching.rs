@@ -170,41 +170,24 @@ impl ShapeMatching {
     ) -> Self {
         let arity = mesh.kind().arity();
         let nodes = mesh.nodes();
+        let cells = mesh.num_cells();
+        let simplex = arity == SIMPLEX_ARITY;
         let mut out = ShapeMatching {
             kind: mesh.kind(),
             arity,
             cells: mesh.cell_indices().to_vec(),
-            rest: Vec::with_capacity(mesh.cell_indices().len()),
+            rest: vec![Vector::ZERO; mesh.cell_indices().len()],
             k: Vec::new(),
             c: Vec::new(),
-            rest_sum: Vec::new(),
-            rest_pair: Vec::new(),
-            rest_volume: Vec::new(),
-            rotations: vec![initial; mesh.num_cells()],
+            rest_sum: vec![0.0; cells],
+            rest_pair: vec![0.0; cells],
+            rest_volume: vec![0.0; if simplex { cells } else { 0 }],
+            rotations: vec![initial; cells],
             fit,
             damping,
         };
         for (cell, ids) in mesh.cells().enumerate() {
-            let o = nodes[ids[0] as usize];
-            let centroid =
-                ids.iter().map(|&i| nodes[i as usize] - o).sum::<Vector>() / arity as Real;
-            let mut spread = 0.0;
-            let mut sum = 0.0;
-            let mut a = math::outer(Vector::ZERO, Vector::ZERO);
-            for &i in ids {
-                let r0 = (nodes[i as usize] - o) - centroid;
-                spread += r0.length_squared();
-                sum += r0.length();
-                a += math::outer(r0, r0);
-                out.rest.push(r0);
-            }
-            out.rest_sum.push(sum);
-            out.rest_pair.push(math::least_singular_pair_sum(a));
-            if arity == SIMPLEX_ARITY {
-                let rest = &out.rest[cell * arity..];
-                let rest: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| rest[a]);
-                out.rest_volume.push(math::simplex_volume(&rest));
-            }
+            let spread = out.set_cell_rest(cell, |a| nodes[ids[a] as usize]);
             let v = mesh.rest_volumes()[cell];
             let material_k = MATERIAL_SCALE * params.material.young_modulus * v / spread;
             let (k, c) = params.k_c(material_k, params.material.density * v / arity as Real);
@@ -212,6 +195,31 @@ impl ShapeMatching {
             out.c.push(c);
         }
         out
+    }
+
+    /// Sets cell `cell`'s rest offsets (from its centroid) and what is derived from them, its
+    /// vertices at rest at `p(a)`; returns `Σ |R0_a|²`.
+    fn set_cell_rest(&mut self, cell: usize, p: impl Fn(usize) -> Vector) -> Real {
+        let n = self.arity;
+        let o = p(0);
+        let centroid = (0..n).map(|a| p(a) - o).sum::<Vector>() / n as Real;
+        let mut spread = 0.0;
+        let mut sum = 0.0;
+        let mut pairs = math::outer(Vector::ZERO, Vector::ZERO);
+        for a in 0..n {
+            let r0 = (p(a) - o) - centroid;
+            spread += r0.length_squared();
+            sum += r0.length();
+            pairs += math::outer(r0, r0);
+            self.rest[cell * n + a] = r0;
+        }
+        self.rest_sum[cell] = sum;
+        self.rest_pair[cell] = math::least_singular_pair_sum(pairs);
+        if n == SIMPLEX_ARITY {
+            let rest: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| self.rest[cell * n + a]);
+            self.rest_volume[cell] = math::simplex_volume(&rest);
+        }
+        spread
     }
 
     /// Each cell's warm-start rotation (the last fitted one).
@@ -498,6 +506,14 @@ impl super::law::ElementLaw for ShapeMatching {
 
     fn set_rotations(&mut self, rotations: &[Rotation]) -> Result<(), usize> {
         ShapeMatching::set_rotations(self, rotations)
+    }
+
+    fn set_rest(&mut self, rest: &[Vector], changed: &[u32]) {
+        let n = self.arity;
+        for &cell in changed {
+            let cell = cell as usize;
+            self.set_cell_rest(cell, |a| rest[cell * n + a]);
+        }
     }
 
     fn implicit_terms(&self) -> Option<super::law::ImplicitTerms<'_>> {

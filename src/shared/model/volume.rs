@@ -59,6 +59,17 @@ impl Volume {
         out
     }
 
+    /// Sets the rest `D` of the cells `changed` from their rest vertices `rest` (by slot), after
+    /// plastic flow; `κ V0` stays the built cell's.
+    pub fn set_rest(&mut self, rest: &[Vector], changed: &[u32]) {
+        for &cell in changed {
+            let cell = cell as usize;
+            let p: [Vector; SIMPLEX_ARITY] =
+                std::array::from_fn(|a| rest[cell * SIMPLEX_ARITY + a]);
+            self.d0[cell] = math::simplex_gradients(&p).0;
+        }
+    }
+
     /// The scale of cell `cell`'s Gauss–Newton Hessian `κ V0/D0² ∇D ∇Dᵀ` (zero for a
     /// negative `κ`, as in [`Volume::vertex_terms_at`]).
     pub fn hessian_scale(&self, cell: usize) -> Real {

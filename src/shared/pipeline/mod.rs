@@ -694,7 +694,13 @@ fn check_member(
     let (body, sc) = (&mut *m.body, &mut *m.sc);
     let integrate_start = Instant::now();
     // 4. containment
-    let quality = containment::contain(body, ctx, bodies, (&sc.rigid, &mut sc.touch));
+    let mut quality = containment::contain(body, ctx, bodies, (&sc.rigid, &mut sc.touch));
+    // 4b. plastic flow, of a sane state
+    let released = quality.and_then(|_| body.flow(ctx.dt));
+    if released.is_some() {
+        quality = Some(containment::Quality::of(body, Real::INFINITY));
+    }
+    body.last.report.plastic_dissipation = released.unwrap_or(0.0);
     body.refit_surface();
     // 5. report
     finish::diagnose(body, sc, &m.candidates, m.stats, quality);
