@@ -121,8 +121,9 @@ pub struct PipelineSettings {
     /// (it hangs straight under the sweeps alone). `None`, the default: automatic,
     /// [`AUTO_GLOBAL_ITERATIONS`](super::AUTO_GLOBAL_ITERATIONS) for a body whose explicit
     /// step would take more than [`GLOBAL_SUBSTEPS`](super::GLOBAL_SUBSTEPS) substeps a step at
-    /// rest (the beam: 746 at 60 Hz), none otherwise (the `fall` cube at res 9: 90; the 10 cm
-    /// silicone ball of `scenes ball`: 95; the limb: 3); `Some(0)`: the sweeps alone. Each
+    /// rest (the beam: 746 at 60 Hz) and for a plastic body (which flows where its solve
+    /// ends), none otherwise (the `fall` cube at res 9: 90; the 10 cm silicone ball of
+    /// `scenes ball`: 95; the limb: 3); `Some(0)`: the sweeps alone. Each
     /// step assembles and factors a coarse system of at most 384 unknowns (32 clusters of
     /// nodes, each moving affinely) and each iteration costs about a sweep: with 10, the
     /// 1 075-node beam of `scenes bending --res 5` costs 4–7× what its 2 sweeps cost alone;
@@ -720,6 +721,11 @@ fn global_iterations(body: &Deformable, ctx: &StepContext<'_>) -> usize {
     }
     if !settings.integrator.steps_implicitly(body) {
         return 0;
+    }
+    // A plastic body flows where its solve ends: the sweeps' unconverged strain would flow (a
+    // bar bent 90° under 2 sweeps kept 2.7 times the bend it should).
+    if body.plasticity().is_some() {
+        return AUTO_GLOBAL_ITERATIONS;
     }
     let at_rest = body.rest.slack(&body.state.elements).at_rest;
     if ctx.dt > GLOBAL_SUBSTEPS as Real * settings.safety * at_rest {
