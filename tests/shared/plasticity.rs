@@ -239,7 +239,7 @@ fn a_bar_bent_a_quarter_turn_and_released_keeps_the_bend_of_a_plastic_beam() {
     // lattice of 5 cm by 2.5 cm cells kept up to 1.35 times the bend, and 1.2 in 3D with 5 cm across
     // the bend axis).
     use crate::dim::math::{planar_angle, rotation_from_angle};
-    let quarter = std::f32::consts::FRAC_PI_2 as Real;
+    let quarter = std::f32::consts::FRAC_PI_2;
     let expected = kept_curvature(quarter, 0.1);
     for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
         for integrator in [Integrator::Explicit, Integrator::Implicit { iterations: 2 }] {
