@@ -235,8 +235,8 @@ fn cell_forces<const N: usize>(
 
 /// Centroid springs have no implicit step: their terms couple a vertex to its cell's centroid,
 /// which the implicit step's term families do not cover.
-impl super::law::ElementLaw for CentroidSprings {
-    fn boxed_clone(&self) -> Box<dyn super::law::ElementLaw> {
+impl super::ElementLaw for CentroidSprings {
+    fn boxed_clone(&self) -> Box<dyn super::ElementLaw> {
         Box::new(self.clone())
     }
 
@@ -270,8 +270,8 @@ impl super::law::ElementLaw for CentroidSprings {
     }
 
     #[cfg(feature = "parallel")]
-    fn varying(&self) -> super::law::Varying {
-        super::law::Varying::Nothing
+    fn varying(&self) -> super::Varying {
+        super::Varying::Nothing
     }
 
     #[cfg(feature = "parallel")]

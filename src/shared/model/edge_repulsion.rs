@@ -461,8 +461,8 @@ fn cell_terms(
     )
 }
 
-impl super::law::ElementLaw for EdgeRepulsion {
-    fn boxed_clone(&self) -> Box<dyn super::law::ElementLaw> {
+impl super::ElementLaw for EdgeRepulsion {
+    fn boxed_clone(&self) -> Box<dyn super::ElementLaw> {
         Box::new(self.clone())
     }
 
@@ -529,8 +529,8 @@ impl super::law::ElementLaw for EdgeRepulsion {
         EdgeRepulsion::constant_bounds(self, bounds);
     }
 
-    fn implicit_terms(&self) -> Option<super::law::ImplicitTerms<'_>> {
-        Some(super::law::ImplicitTerms {
+    fn implicit_terms(&self) -> Option<super::ImplicitTerms<'_>> {
+        Some(super::ImplicitTerms {
             springs: Some(&self.edges),
             repulsion: Some(self),
             shape: None,
@@ -553,8 +553,8 @@ impl super::law::ElementLaw for EdgeRepulsion {
     }
 
     #[cfg(feature = "parallel")]
-    fn varying(&self) -> super::law::Varying {
-        super::law::Varying::Cells
+    fn varying(&self) -> super::Varying {
+        super::Varying::Cells
     }
 
     #[cfg(feature = "parallel")]

@@ -74,7 +74,9 @@ pub mod springs;
 mod tests;
 pub mod volume;
 
-pub(crate) use law::ElementLaw;
+#[cfg(feature = "parallel")]
+pub(crate) use law::Varying;
+pub(crate) use law::{ElementLaw, ImplicitTerms};
 pub(crate) use slack::Slack;
 
 pub(crate) use implicit::{Hold, Solve, StepInput, MIN_STEP_VOLUME};

@@ -6,9 +6,8 @@ use rayon::prelude::*;
 
 use super::super::math::{Real, Vector};
 use super::super::mesh::Mesh;
-use super::law::Varying;
 use super::volume::Volume;
-use super::{Accumulator, ElementLaw, NodeBounds, PARALLEL_MIN_WORK};
+use super::{Accumulator, ElementLaw, NodeBounds, Varying, PARALLEL_MIN_WORK};
 
 /// Springs (and nodes) per rayon task: enough work per task that splitting costs little,
 /// few enough that the threads get several tasks each on the meshes that split.

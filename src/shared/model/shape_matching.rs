@@ -476,8 +476,8 @@ impl ShapeMatching {
     }
 }
 
-impl super::law::ElementLaw for ShapeMatching {
-    fn boxed_clone(&self) -> Box<dyn super::law::ElementLaw> {
+impl super::ElementLaw for ShapeMatching {
+    fn boxed_clone(&self) -> Box<dyn super::ElementLaw> {
         Box::new(self.clone())
     }
 
@@ -516,8 +516,8 @@ impl super::law::ElementLaw for ShapeMatching {
         }
     }
 
-    fn implicit_terms(&self) -> Option<super::law::ImplicitTerms<'_>> {
-        Some(super::law::ImplicitTerms {
+    fn implicit_terms(&self) -> Option<super::ImplicitTerms<'_>> {
+        Some(super::ImplicitTerms {
             shape: Some(self),
             ..Default::default()
         })
@@ -543,8 +543,8 @@ impl super::law::ElementLaw for ShapeMatching {
     }
 
     #[cfg(feature = "parallel")]
-    fn varying(&self) -> super::law::Varying {
-        super::law::Varying::Cells
+    fn varying(&self) -> super::Varying {
+        super::Varying::Cells
     }
 
     #[cfg(feature = "parallel")]

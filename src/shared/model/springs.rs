@@ -280,8 +280,8 @@ fn term<const NONLINEAR: bool>(
     }
 }
 
-impl super::law::ElementLaw for Springs {
-    fn boxed_clone(&self) -> Box<dyn super::law::ElementLaw> {
+impl super::ElementLaw for Springs {
+    fn boxed_clone(&self) -> Box<dyn super::ElementLaw> {
         Box::new(self.clone())
     }
 
@@ -304,8 +304,8 @@ impl super::law::ElementLaw for Springs {
         Springs::constant_bounds(self, bounds);
     }
 
-    fn implicit_terms(&self) -> Option<super::law::ImplicitTerms<'_>> {
-        Some(super::law::ImplicitTerms {
+    fn implicit_terms(&self) -> Option<super::ImplicitTerms<'_>> {
+        Some(super::ImplicitTerms {
             springs: Some(self),
             ..Default::default()
         })
@@ -327,10 +327,10 @@ impl super::law::ElementLaw for Springs {
     }
 
     #[cfg(feature = "parallel")]
-    fn varying(&self) -> super::law::Varying {
+    fn varying(&self) -> super::Varying {
         match self.law {
-            Law::Linear => super::law::Varying::Nothing,
-            Law::Nonlinear => super::law::Varying::Springs,
+            Law::Linear => super::Varying::Nothing,
+            Law::Nonlinear => super::Varying::Springs,
         }
     }
 
