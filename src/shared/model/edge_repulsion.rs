@@ -482,10 +482,23 @@ impl super::ElementLaw for EdgeRepulsion {
         true
     }
 
-    /// A flowed cell's rest heights from its rest vertices, and every edge's rest length the
-    /// mean of its length in the cells that share it (their rest shapes differ once they
-    /// flow).
+    /// A flowed cell's rest heights from its rest vertices, and the rest length of each of its
+    /// edges the mean of that edge's length in the cells that share it (their rest shapes
+    /// differ once they flow); edges of no flowed cell keep theirs.
     fn set_rest(&mut self, rest: &[Vector], changed: &[u32]) {
+        let pairs = &self.edges.pairs;
+        let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
+        // Each pair of a cell's vertices: its local indices and its spring.
+        let springs = |cell: usize| {
+            let ids = ids[cell];
+            (0..SIMPLEX_ARITY).flat_map(move |a| {
+                (a + 1..SIMPLEX_ARITY).filter_map(move |b| {
+                    let pair = [ids[a].min(ids[b]), ids[a].max(ids[b])];
+                    pairs.binary_search(&pair).ok().map(|e| (a, b, e))
+                })
+            })
+        };
+        let mut touched = vec![false; pairs.len()];
         for &cell in changed {
             let cell = cell as usize;
             let p: [Vector; SIMPLEX_ARITY] =
@@ -493,28 +506,24 @@ impl super::ElementLaw for EdgeRepulsion {
             for (a, (_, h0)) in heights(&p).into_iter().enumerate() {
                 self.h0[cell * SIMPLEX_ARITY + a] = h0;
             }
+            for (_, _, e) in springs(cell) {
+                touched[e] = true;
+            }
         }
-        let pairs = &self.edges.pairs;
         let mut length = vec![0.0; pairs.len()];
         let mut count = vec![0u32; pairs.len()];
-        for (cell, ids) in self.cells.chunks_exact(SIMPLEX_ARITY).enumerate() {
-            for a in 0..SIMPLEX_ARITY {
-                for b in a + 1..SIMPLEX_ARITY {
-                    let pair = [ids[a].min(ids[b]), ids[a].max(ids[b])];
-                    if let Ok(e) = pairs.binary_search(&pair) {
-                        let (pa, pb) = (
-                            rest[cell * SIMPLEX_ARITY + a],
-                            rest[cell * SIMPLEX_ARITY + b],
-                        );
-                        length[e] += pa.distance(pb);
-                        count[e] += 1;
-                    }
+        for cell in 0..ids.len() {
+            for (a, b, e) in springs(cell) {
+                if touched[e] {
+                    let at = |v: usize| rest[cell * SIMPLEX_ARITY + v];
+                    length[e] += at(a).distance(at(b));
+                    count[e] += 1;
                 }
             }
         }
-        for ((rest, l), n) in self.edges.rest.iter_mut().zip(length).zip(count) {
-            if n > 0 {
-                *rest = l / n as Real;
+        for (e, rest) in self.edges.rest.iter_mut().enumerate() {
+            if touched[e] && count[e] > 0 {
+                *rest = length[e] / count[e] as Real;
             }
         }
     }

@@ -440,28 +440,47 @@ impl ModelState {
             return if rest.is_empty() { Ok(()) } else { Err(0) };
         };
         plastic.set_rest(rest)?;
-        let all: Vec<u32> = (0..(rest.len() / SIMPLEX_ARITY) as u32).collect();
-        self.elements.set_rest(plastic.rest(), &all);
-        if let Some(volume) = &mut self.volume {
-            volume.set_rest(plastic.rest(), &all);
-        }
+        // Only the cells that flowed: the others' rest data is the built one, bit for bit.
+        let flowed = plastic.flowed();
+        self.derive_rest(&flowed);
         Ok(())
     }
 
+    /// Derives the rest data of the cells `changed` from their rest shapes.
+    fn derive_rest(&mut self, changed: &[u32]) {
+        let Some(plastic) = &self.plastic else {
+            return;
+        };
+        self.elements.set_rest(plastic.rest(), changed);
+        if let Some(volume) = &mut self.volume {
+            volume.set_rest(plastic.rest(), changed);
+        }
+    }
+
     /// Flows the cells strained past yield at `x` over a step of `dt` (`plastic.rs`); returns
-    /// the elastic energy the flow released, `None` if no cell flowed.
+    /// the elastic energy the flow released, `None` if no cell flowed. A flow that would raise
+    /// the energy (a cell flowing along one direction while the volumetric term holds its
+    /// volume, near ν = 0.5; or edges shared with cells that did not flow) is undone: flow
+    /// creates no energy.
     pub fn flow(&mut self, x: &[Vector], dt: Real) -> Option<Real> {
         let plastic = self.plastic.as_mut()?;
         let before = elastic_energy(&*self.elements, self.volume.as_ref(), x);
+        let kept = plastic.rest().to_vec();
         let changed = plastic.flow(x, dt);
         if changed.is_empty() {
             return None;
         }
-        self.elements.set_rest(plastic.rest(), &changed);
-        if let Some(volume) = &mut self.volume {
-            volume.set_rest(plastic.rest(), &changed);
+        self.derive_rest(&changed);
+        let released = before - elastic_energy(&*self.elements, self.volume.as_ref(), x);
+        if released < 0.0 {
+            if let Some(plastic) = &mut self.plastic {
+                // The same shapes as before the flow: the derived data comes back bit for bit.
+                plastic.put_back(&kept);
+            }
+            self.derive_rest(&changed);
+            return None;
         }
-        Some(before - elastic_energy(&*self.elements, self.volume.as_ref(), x))
+        Some(released)
     }
 
     /// Elastic (stored) energy at `x`.

@@ -55,14 +55,47 @@ impl Plastic {
     }
 
     /// Sets the cells' rest vertices (a snapshot's); `Err(expected length)` if the length is
-    /// wrong or a rest shape is not finite.
+    /// wrong or a rest shape is not one the flow can reach (not finite, flat or inverted, or
+    /// stretched past `max_strain` against its built shape).
     #[cfg_attr(not(feature = "serde"), allow(dead_code))]
     pub fn set_rest(&mut self, rest: &[Vector]) -> Result<(), usize> {
-        if rest.len() != self.rest.len() || !rest.iter().all(|p| p.is_finite()) {
+        let reachable = rest.len() == self.rest.len()
+            && rest
+                .chunks_exact(SIMPLEX_ARITY)
+                .zip(self.built.chunks_exact(SIMPLEX_ARITY))
+                .all(|(r, b)| {
+                    let plastic = edges(r) * edges(b).inverse();
+                    plastic.is_finite()
+                        && plastic.determinant() > 0.0
+                        && principal_strains(plastic).abs().max_element()
+                            <= self.params.max_strain + 1e-3
+                });
+        if !reachable {
             return Err(self.rest.len());
         }
         self.rest.copy_from_slice(rest);
         Ok(())
+    }
+
+    /// Puts back rest vertices this body had (no check: a flow undone).
+    pub fn put_back(&mut self, rest: &[Vector]) {
+        self.rest.copy_from_slice(rest);
+    }
+
+    /// The cells whose rest shape is not the built one, in order.
+    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
+    pub fn flowed(&self) -> Vec<u32> {
+        let bits = |p: &Vector| p.to_array().map(Real::to_bits);
+        (0..self.rest.len() / SIMPLEX_ARITY)
+            .filter(|&c| {
+                let slots = c * SIMPLEX_ARITY..(c + 1) * SIMPLEX_ARITY;
+                self.rest[slots.clone()]
+                    .iter()
+                    .zip(&self.built[slots])
+                    .any(|(a, b)| bits(a) != bits(b))
+            })
+            .map(|c| c as u32)
+            .collect()
     }
 
     /// Flows the cells at `x` over a step of `dt`: the cells whose rest shape changed, in
@@ -160,6 +193,18 @@ fn symmetric_eigen(mut a: Matrix) -> (Vector, Matrix) {
     (Vector::from_array(std::array::from_fn(|k| a.col(k)[k])), v)
 }
 
+/// The log strains `½ ln λ²` of the principal stretches whose squares are `squares`.
+fn log_strains(squares: Vector) -> Vector {
+    Vector::from_array(std::array::from_fn(|k| {
+        0.5 * squares[k].max(Real::MIN_POSITIVE).ln()
+    }))
+}
+
+/// The principal log strains of the deformation `f`.
+fn principal_strains(f: Matrix) -> Vector {
+    log_strains(symmetric_eigen(f.transpose() * f).0)
+}
+
 /// The edge vectors `p_{b+1} − p_0` of a simplex, as columns.
 fn edges(p: &[Vector]) -> Matrix {
     let mut m = Matrix::ZERO;
@@ -174,9 +219,7 @@ fn edges(p: &[Vector]) -> Matrix {
 fn limited(dm: Matrix, built: Matrix, max: Real) -> Option<Matrix> {
     let plastic = dm * built.inverse();
     let (squares, directions) = symmetric_eigen(plastic.transpose() * plastic);
-    let strains = Vector::from_array(std::array::from_fn(|k| {
-        0.5 * squares[k].max(Real::MIN_POSITIVE).ln()
-    }));
+    let strains = log_strains(squares);
     let clamped = strains.clamp(Vector::splat(-max), Vector::splat(max));
     let out = if clamped == strains {
         dm
