@@ -463,19 +463,18 @@ impl ModelState {
     /// volume, near ν = 0.5; or edges shared with cells that did not flow) is undone: flow
     /// creates no energy.
     pub fn flow(&mut self, x: &[Vector], dt: Real) -> Option<Real> {
-        let plastic = self.plastic.as_mut()?;
-        let before = elastic_energy(&*self.elements, self.volume.as_ref(), x);
-        let kept = plastic.rest().to_vec();
-        let changed = plastic.flow(x, dt);
+        let changed = self.plastic.as_mut()?.flow(x, dt);
         if changed.is_empty() {
             return None;
         }
+        // The rest data is still derived from the shapes before the flow.
+        let before = elastic_energy(&*self.elements, self.volume.as_ref(), x);
         self.derive_rest(&changed);
         let released = before - elastic_energy(&*self.elements, self.volume.as_ref(), x);
         if released < 0.0 {
             if let Some(plastic) = &mut self.plastic {
                 // The same shapes as before the flow: the derived data comes back bit for bit.
-                plastic.put_back(&kept);
+                plastic.undo();
             }
             self.derive_rest(&changed);
             return None;

@@ -32,6 +32,8 @@ pub(crate) struct Plastic {
     built: Vec<Vector>,
     /// Each cell's rest vertices now, by slot.
     rest: Vec<Vector>,
+    /// The rest vertices the last flow replaced: each changed cell and its vertices before.
+    replaced: Vec<(u32, [Vector; SIMPLEX_ARITY])>,
 }
 
 /// A strain change below this is no flow (it would only round the rest data).
@@ -45,6 +47,7 @@ impl Plastic {
             params,
             cells: cells.to_vec(),
             rest: built.clone(),
+            replaced: Vec::new(),
             built,
         }
     }
@@ -77,9 +80,12 @@ impl Plastic {
         Ok(())
     }
 
-    /// Puts back rest vertices this body had (no check: a flow undone).
-    pub fn put_back(&mut self, rest: &[Vector]) {
-        self.rest.copy_from_slice(rest);
+    /// Undoes the last flow: its cells get their rest vertices back.
+    pub fn undo(&mut self) {
+        for (cell, before) in self.replaced.drain(..) {
+            let first = cell as usize * SIMPLEX_ARITY;
+            self.rest[first..first + SIMPLEX_ARITY].copy_from_slice(&before);
+        }
     }
 
     /// The cells whose rest shape is not the built one, in order.
@@ -108,6 +114,7 @@ impl Plastic {
             1.0 - (-p.flow_rate * dt).exp()
         };
         let mut changed = Vec::new();
+        self.replaced.clear();
         if share.is_nan() || share <= 0.0 {
             return changed;
         }
@@ -144,6 +151,9 @@ impl Plastic {
                 p.max_strain,
             );
             let Some(dm) = dm else { continue };
+            let before: [Vector; SIMPLEX_ARITY] =
+                std::array::from_fn(|a| self.rest[slots.start + a]);
+            self.replaced.push((cell as u32, before));
             let origin = self.rest[slots.start];
             for b in 0..DIM {
                 self.rest[slots.start + 1 + b] = origin + dm.col(b);
