@@ -19,9 +19,36 @@ fn plasticity() -> Plasticity {
     }
 }
 
-/// A 1 m bar along the first axis (10 cm across), its end faces bound to two kinematic bones
-/// that start where the ends are.
-fn bar(
+/// A 1 m bar along the first axis, 10 cm across: its nodes along and across, its material and
+/// deformation damping, and where its left end is.
+struct Bar {
+    along: usize,
+    across: usize,
+    material: Material,
+    deformation_damping: Real,
+    left: Real,
+}
+
+/// The bar pulled in the stretch tests: centred on the origin, 10 cm cells.
+fn pulled() -> Bar {
+    Bar {
+        along: 11,
+        across: 3,
+        material: Material {
+            density: 1000.0,
+            young_modulus: 1e5,
+            damping_ratio: 0.3,
+            ..Default::default()
+        },
+        deformation_damping: 0.0,
+        left: -0.5,
+    }
+}
+
+/// `bar` under `model` and `integrator`, its end faces bound to two kinematic bones (left,
+/// right) that start where the ends are.
+fn bar_of(
+    bar: Bar,
     model: ElementModel,
     integrator: Integrator,
 ) -> (
@@ -36,17 +63,16 @@ fn bar(
         .insert_body(RigidBodyBuilder::kinematic_position_based());
     let mut half = Vector::splat(0.05);
     half[0] = 0.5;
-    let mut res = [3; DIM];
-    res[0] = 11;
+    let mut res = [bar.across; DIM];
+    res[0] = bar.along;
+    let mut shift = Vector::ZERO;
+    shift[0] = bar.left + 0.5;
     let body = DeformableBuilder::cuboid(half, res)
         .model(model)
-        .material(Material {
-            density: 1000.0,
-            young_modulus: 1e5,
-            damping_ratio: 0.3,
-            ..Default::default()
-        })
+        .material(bar.material)
         .plasticity(plasticity())
+        .deformation_damping(bar.deformation_damping)
+        .translation(shift)
         .build()
         .unwrap();
     let h = world.insert(body);
@@ -56,10 +82,22 @@ fn bar(
             .filter(|&i| (d.positions()[i as usize][0] - x).abs() < 1e-4)
             .collect()
     };
-    let (l, r) = (ends(-0.5), ends(0.5));
+    let (l, r) = (ends(bar.left), ends(bar.left + 1.0));
     world.attach_nodes(h, left, &l).unwrap();
     world.attach_nodes(h, right, &r).unwrap();
     (world, h, [left, right])
+}
+
+/// [`pulled`] under `model` and `integrator`.
+fn bar(
+    model: ElementModel,
+    integrator: Integrator,
+) -> (
+    DeformableWorld,
+    DeformableHandle,
+    [crate::dim::rapier::prelude::RigidBodyHandle; 2],
+) {
+    bar_of(pulled(), model, integrator)
 }
 
 /// The bar's length: the mean first coordinate of its right end's nodes less its left end's
@@ -243,40 +281,19 @@ fn a_bar_bent_a_quarter_turn_and_released_keeps_the_bend_of_a_plastic_beam() {
     let expected = kept_curvature(quarter, 0.1);
     for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
         for integrator in [Integrator::Explicit, Integrator::Implicit { iterations: 2 }] {
-            let (mut world, left) = weightless_with_bone();
-            world.pipeline.settings.integrator = integrator;
-            let right = world
-                .physics
-                .insert_body(RigidBodyBuilder::kinematic_position_based());
-            let mut half = Vector::splat(0.05);
-            half[0] = 0.5;
-            let mut res = [5; DIM];
-            res[0] = 41;
-            let mut shift = Vector::ZERO;
-            shift[0] = 0.5;
-            let body = DeformableBuilder::cuboid(half, res)
-                .model(model)
-                .material(Material {
+            let bent = Bar {
+                along: 41,
+                across: 5,
+                material: Material {
                     density: 100.0,
                     young_modulus: 1e6,
                     damping_ratio: 0.3,
                     ..Default::default()
-                })
-                .plasticity(plasticity())
-                .deformation_damping(5.0)
-                .translation(shift)
-                .build()
-                .unwrap();
-            let h = world.insert(body);
-            let ends = |x: Real| -> Vec<u32> {
-                let d = &world.deformables[h];
-                (0..d.num_nodes() as u32)
-                    .filter(|&i| (d.positions()[i as usize][0] - x).abs() < 1e-4)
-                    .collect()
+                },
+                deformation_damping: 5.0,
+                left: 0.0,
             };
-            let (l, r) = (ends(0.0), ends(1.0));
-            world.attach_nodes(h, left, &l).unwrap();
-            world.attach_nodes(h, right, &r).unwrap();
+            let (mut world, h, [_, right]) = bar_of(bent, model, integrator);
             let steps = 120;
             for k in 1..=steps + 30 {
                 // The end where a uniform bend by `theta` takes it, turned by `theta`.
@@ -291,7 +308,7 @@ fn a_bar_bent_a_quarter_turn_and_released_keeps_the_bend_of_a_plastic_beam() {
                 world.physics.bodies[right].set_next_kinematic_position(pose);
                 world.step();
             }
-            world.deformables[h].detach_nodes(&r);
+            world.deformables[h].detach_body(right);
             for _ in 0..120 {
                 world.step();
             }
