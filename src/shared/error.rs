@@ -143,6 +143,36 @@ pub enum BuildError {
         /// Cell kind name.
         kind: &'static str,
     },
+    /// A gas chamber's facets name a node the mesh does not have.
+    #[error("chamber {chamber}'s facet {facet} refers to node {index}, but the mesh has only {node_count} nodes")]
+    ChamberIndexOutOfRange {
+        /// The chamber (in the order the builder was given them).
+        chamber: usize,
+        /// The offending facet.
+        facet: usize,
+        /// The index found in it.
+        index: u32,
+        /// Number of nodes in the mesh.
+        node_count: usize,
+    },
+    /// A gas chamber's facets do not close: a ridge (an edge in 3D, a node in 2D) is not met
+    /// once each way by its facets, so the gas would leak there.
+    #[error("chamber {chamber} is open at nodes {ridge:?}: its facets must close, each ridge met once each way")]
+    OpenChamber {
+        /// The chamber (in the order the builder was given them).
+        chamber: usize,
+        /// The ridge's nodes (two in 3D, one in 2D).
+        ridge: Vec<u32>,
+    },
+    /// A gas chamber's facets enclose no volume at rest, or face into the gas (their normals
+    /// must point out of it, into the walls).
+    #[error("chamber {chamber} encloses a volume of {volume:e} at rest: its facets must face out of the gas and enclose a positive volume")]
+    InvertedChamber {
+        /// The chamber (in the order the builder was given them).
+        chamber: usize,
+        /// The signed volume its facets enclose at rest.
+        volume: Real,
+    },
     /// The element model cannot be built on this cell kind.
     #[error("the {model} model needs simplex cells (triangles / tetrahedra), but the mesh has {kind} cells; build the lattice with CellKind::Simplex")]
     UnsupportedCells {

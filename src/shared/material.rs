@@ -127,6 +127,53 @@ impl Plasticity {
     }
 }
 
+/// A gas sealed in a body's chambers, held by the isothermal law `p V = const`: balls, balloons,
+/// tyres, pneumatic pads (`docs/ARCHITECTURE.md` §3.7). The gas pushes each chamber's walls out
+/// with its pressure over the ambient one.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Gas {
+    /// Pressure over the ambient one (gauge), Pa, at the chamber's built volume. Negative: a
+    /// chamber under suction; the absolute pressure `pressure + ambient` must be above 0.
+    pub pressure: Real,
+    /// The ambient (absolute) pressure outside, Pa, ≥ 0: what the gas pushes against.
+    pub ambient: Real,
+}
+
+impl Gas {
+    /// Sea-level atmospheric pressure, Pa.
+    pub const ATMOSPHERE: Real = 101_325.0;
+
+    /// A gas at `pressure` Pa over the atmosphere ([`Gas::ATMOSPHERE`]) at the built volume.
+    pub fn gauge(pressure: Real) -> Gas {
+        Gas {
+            pressure,
+            ambient: Gas::ATMOSPHERE,
+        }
+    }
+
+    /// Checks the parameters.
+    pub(crate) fn validate(&self) -> Result<(), BuildError> {
+        let a = self.ambient;
+        if !(a.is_finite() && a >= 0.0) {
+            return Err(BuildError::InvalidParameter {
+                name: "Gas::ambient",
+                value: a,
+                expected: "a finite pressure of at least 0 (Pa)",
+            });
+        }
+        let p = self.pressure;
+        if !(p.is_finite() && p + a > 0.0) {
+            return Err(BuildError::InvalidParameter {
+                name: "Gas::pressure",
+                value: p,
+                expected: "a finite gauge pressure above minus the ambient one (Pa)",
+            });
+        }
+        Ok(())
+    }
+}
+
 /// Where element stiffness comes from.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Copy, Clone, Debug, PartialEq, Default)]

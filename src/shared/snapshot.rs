@@ -47,7 +47,8 @@
 //! Saved, per deformable: the rest mesh's nodes, cells and cell kind; the element model,
 //! material and stiffness form; node positions and velocities; the shape-based element's
 //! per-cell warm-start rotations; a plastic body's flow parameters and each cell's rest
-//! vertices (the rest data derived from them is rebuilt); the element forces and stiffness/damping bounds of the last
+//! vertices (the rest data derived from them is rebuilt); the gas chambers (facets, the gas's
+//! `pV` and built volume, the ambient pressure); the element forces and stiffness/damping bounds of the last
 //! evaluation with the flag that says whether they are still current, and the crossing
 //! limiter; the contact material (coefficients, combine rules, collision groups); gravity
 //! scale; deformation damping rate; bindings to rigid bodies; contacts and touched colliders of the last step (they
@@ -98,7 +99,7 @@ mod imp {
     use super::super::material::{Material, Plasticity, Resolved, Stiffness};
     use super::super::math::{Real, Rotation, Vector};
     use super::super::mesh::{CellKind, Mesh};
-    use super::super::model::{Accumulator, ElementModel, ModelState};
+    use super::super::model::{gas::Chamber, Accumulator, ElementModel, ModelState};
     use super::super::rapier::geometry::ColliderHandle;
     use super::super::report::DeformableReport;
     use super::super::set::DeformableHandle;
@@ -171,6 +172,9 @@ mod imp {
         /// Plastic flow and each cell's rest vertices (absent in older snapshots: none).
         #[serde(default)]
         plastic: Option<(Plasticity, Cow<'a, [Vector]>)>,
+        /// Gas chambers (absent in older snapshots: none).
+        #[serde(default)]
+        gas: Cow<'a, [Chamber]>,
     }
 
     impl Serialize for Deformable {
@@ -206,6 +210,7 @@ mod imp {
                     .elements
                     .plasticity()
                     .map(|p| (p, Cow::Borrowed(self.state.elements.plastic_rest()))),
+                gas: Cow::Borrowed(self.state.elements.chambers()),
             }
             .serialize(s)
         }
@@ -251,6 +256,13 @@ mod imp {
                     )
                 })?;
             }
+            let gas = self.gas.into_owned();
+            if let Some(k) = gas.iter().position(|c| !c.fits(n)) {
+                return Err(format!(
+                    "gas chamber {k} does not fit the mesh or is out of range"
+                ));
+            }
+            elements.set_gas(gas, n);
             elements
                 .set_warm_start(&self.warm_start)
                 .map_err(|expected| {

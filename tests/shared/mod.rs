@@ -12,6 +12,7 @@ mod energy;
 mod errors;
 mod fall;
 mod faults;
+mod gas;
 mod impact;
 mod implicit;
 // The recorded hashes hold for this platform's arithmetic in a default build.

@@ -3,10 +3,10 @@
 use super::super::attach::Bindings;
 use super::super::contact::ContactMaterial;
 use super::super::error::BuildError;
-use super::super::material::{Material, Plasticity, Resolved, Stiffness};
-use super::super::math::{Real, Rotation, Vector, DIM};
+use super::super::material::{Gas, Material, Plasticity, Resolved, Stiffness};
+use super::super::math::{Real, Rotation, Vector, DIM, FACET_ARITY};
 use super::super::mesh::{CellKind, Mesh};
-use super::super::model::{Accumulator, ElementModel, ModelState};
+use super::super::model::{gas, Accumulator, ElementModel, ModelState};
 use super::super::rapier::dynamics::CoefficientCombineRule;
 use super::super::rapier::geometry::InteractionGroups;
 use super::super::report::DeformableReport;
@@ -31,6 +31,9 @@ pub struct DeformableBuilder {
     material: Material,
     stiffness: Stiffness,
     plasticity: Option<Plasticity>,
+    /// Gas in the mesh's own chambers, then in chambers given by their facets.
+    gas: Option<Gas>,
+    chambers: Vec<(Vec<[u32; FACET_ARITY]>, Gas)>,
     translation: Vector,
     rotation: Rotation,
     linvel: Vector,
@@ -71,6 +74,8 @@ impl DeformableBuilder {
             material: Material::default(),
             stiffness: Stiffness::FromMaterial,
             plasticity: None,
+            gas: None,
+            chambers: Vec::new(),
             translation: Vector::ZERO,
             rotation: Rotation::IDENTITY,
             linvel: Vector::ZERO,
@@ -118,6 +123,29 @@ impl DeformableBuilder {
     /// bad parameters.
     pub fn plasticity(mut self, plasticity: Plasticity) -> Self {
         self.plasticity = Some(plasticity);
+        self
+    }
+
+    /// Seals `gas` in the body (`docs/ARCHITECTURE.md` §3.7): in each cavity of the mesh (a
+    /// closed inner piece of its boundary: a hollow ball's hole, a tyre's tube), or, in a body
+    /// without one, behind the outer surface of each of its pieces (the body's own volume
+    /// holds the gas). [`Gas::pressure`] is the gauge pressure at the built shape; the body
+    /// inflates from there until its walls carry it. Any model; both integrators.
+    pub fn gas(mut self, gas: Gas) -> Self {
+        self.gas = Some(gas);
+        self
+    }
+
+    /// Seals `gas` in a chamber of its own behind `facets` (node indices of the rest mesh,
+    /// each facet facing out of the gas as the mesh's boundary faces out of its cells:
+    /// counter-clockwise seen from the walls in 3D; a 2D segment `[a, b]` has the gas on its
+    /// right): a pneumatic pad's chambers, each at its own
+    /// pressure. The facets need not be on the boundary, but must close around a positive
+    /// volume: [`BuildError::OpenChamber`], [`BuildError::InvertedChamber`] and
+    /// [`BuildError::ChamberIndexOutOfRange`] name the chamber (counted from 0 in the order
+    /// given, after the [`DeformableBuilder::gas`] ones) otherwise.
+    pub fn chamber(mut self, facets: Vec<[u32; FACET_ARITY]>, gas: Gas) -> Self {
+        self.chambers.push((facets, gas));
         self
     }
 
@@ -303,7 +331,7 @@ impl DeformableBuilder {
 
         let n = mesh.nodes().len();
         let rest = Rest::new(mesh, self.model, params);
-        let elements = ModelState::build(
+        let mut elements = ModelState::build(
             self.model,
             &rest.mesh,
             &rest.masses,
@@ -311,6 +339,17 @@ impl DeformableBuilder {
             rotation,
             self.plasticity,
         )?;
+        let own = self.gas.into_iter().flat_map(|g| {
+            gas::mesh_chambers(rest.mesh.boundary_facets(), rest.mesh.nodes())
+                .into_iter()
+                .map(move |facets| (facets, g))
+        });
+        let chambers = own
+            .chain(self.chambers)
+            .enumerate()
+            .map(|(k, (facets, g))| gas::Chamber::new(k, facets, g, rest.mesh.nodes()))
+            .collect::<Result<Vec<_>, _>>()?;
+        elements.set_gas(chambers, n);
         let positions: Vec<Vector> = rest
             .mesh
             .nodes()

@@ -18,6 +18,17 @@ mod parts;
 mod surface;
 
 pub use builder::DeformableBuilder;
+
+/// A gas chamber's state ([`Deformable::chambers`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct ChamberState {
+    /// The volume the chamber encloses now (area in 2D).
+    pub volume: Real,
+    /// The gas's pressure over the ambient one now, Pa: `(p + p_a) V₀ / V − p_a`.
+    pub pressure: Real,
+    /// The volume it enclosed as built.
+    pub built_volume: Real,
+}
 pub(crate) use parts::{Activation, LastStep, Rest, State, StepBuffers};
 pub(crate) use surface::SurfaceTree;
 
@@ -230,6 +241,25 @@ impl Deformable {
     /// if it flows.
     pub fn plasticity(&self) -> Option<Plasticity> {
         self.state.elements.plasticity()
+    }
+
+    /// Each gas chamber's volume (area in 2D) and gauge pressure now
+    /// ([`DeformableBuilder::gas`](super::DeformableBuilder::gas)); empty without gas.
+    pub fn chambers(&self) -> Vec<ChamberState> {
+        let x = &self.state.positions;
+        self.state
+            .elements
+            .chambers()
+            .iter()
+            .map(|c| {
+                let volume = c.volume(x);
+                ChamberState {
+                    volume,
+                    pressure: c.law(volume).0,
+                    built_volume: c.built_volume(),
+                }
+            })
+            .collect()
     }
 
     /// Number of cells that are collapsed or inverted now (quality ≤ 0).

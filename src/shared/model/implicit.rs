@@ -64,6 +64,7 @@ use std::ops::Range;
 use super::super::math::{self, Matrix, Real, Rotation, Vector, DIM, SIMPLEX_ARITY};
 use super::super::threads;
 use super::edge_repulsion::EdgeRepulsion;
+use super::gas::Chambers;
 use super::hessian;
 use super::lanes::{self, each, Lane, LaneVector, LANES};
 use super::shape_matching::ShapeMatching;
@@ -416,8 +417,10 @@ impl ModelState {
             elements,
             incidence,
             volume,
+            gas,
             ..
         } = self;
+        let gas = gas.as_ref();
         let elements = &**elements;
         let terms = elements.implicit_terms()?;
         let volume = volume.as_ref();
@@ -450,9 +453,9 @@ impl ModelState {
             None => {
                 x.extend((0..n).map(|i| held[i].start(ahead[i], x0[i])));
                 if held.iter().any(|h| *h != Hold::Free) {
-                    start_scaled(elements, volume, input, (&held, &y), x);
+                    start_scaled((elements, volume, gas), input, (&held, &y), x);
                 } else {
-                    start_rigid(elements, volume, input, &y, x);
+                    start_rigid((elements, volume, gas), input, &y, x);
                 }
             }
         }
@@ -461,6 +464,7 @@ impl ModelState {
             er: None,
             shape: None,
             volume,
+            gas,
             incidence,
             x0,
             h,
@@ -551,12 +555,19 @@ impl Solve<'_> {
         backward: bool,
         mut extra: impl FnMut(usize, &[Vector], &mut Vector, &mut Matrix),
     ) {
+        let mut volumes = self.gas_volumes(x);
         in_order(0..x.len(), backward, |i| {
             let x_now: &[Vector] = x;
-            if let Some(p) = self.node_step(i, x_now, |f, block| extra(i, x_now, f, block)) {
+            let extra = |f: &mut Vector, block: &mut Matrix| extra(i, x_now, f, block);
+            if let Some(p) = self.node_step(i, x_now, &mut volumes, extra) {
                 x[i] = p;
             }
         });
+    }
+
+    /// The gas chambers' volumes at `x` (empty without gas).
+    fn gas_volumes(&self, x: &[Vector]) -> Vec<Real> {
+        self.vertex.gas.map_or(Vec::new(), |g| g.volumes(x))
     }
 
     /// [`Solve::sweep`] without other terms, by slabs of consecutive nodes
@@ -566,26 +577,29 @@ impl Solve<'_> {
     /// each reads only its own nodes and its neighbours', which none of the others writes, and
     /// the sweep ends where the serial one does, bit for bit, whatever the thread count. Within
     /// a slab the order is the node order, which on a lattice passes a push from one side of
-    /// the body to the other in one sweep (`docs/ARCHITECTURE.md` §4.2).
+    /// the body to the other in one sweep (`docs/ARCHITECTURE.md` §4.2). A gas joins every
+    /// node of a chamber: each slab starts from the chambers' volumes where its kind started
+    /// and follows its own nodes' moves.
     pub fn sweep_alone(&self, x: &mut [Vector], backward: bool) {
         let n = x.len();
         let slabs = self.vertex.incidence.slabs(n);
         let kinds = if backward { [1, 0] } else { [0, 1] };
         for kind in kinds {
+            let volumes = self.gas_volumes(x);
             #[cfg(feature = "parallel")]
             if rayon::current_num_threads() > 1 && self.vertex.incidence.slab < n {
-                self.sweep_kind_parallel(x, kind, backward);
+                self.sweep_kind_parallel(x, kind, backward, &volumes);
                 continue;
             }
             for slab in slabs.clone().skip(kind).step_by(2) {
-                self.sweep_slab(slab, backward, x);
+                self.sweep_slab(slab, backward, x, &mut volumes.clone());
             }
         }
     }
 
     /// The slabs of one kind (`kind`: 0 even, 1 odd) at once on rayon's threads.
     #[cfg(feature = "parallel")]
-    fn sweep_kind_parallel(&self, x: &mut [Vector], kind: usize, backward: bool) {
+    fn sweep_kind_parallel(&self, x: &mut [Vector], kind: usize, backward: bool, volumes: &[Real]) {
         use rayon::prelude::*;
         let slab = self.vertex.incidence.slab;
         let mut chunks: Vec<&mut [Vector]> = x.chunks_mut(slab).collect();
@@ -617,8 +631,9 @@ impl Solve<'_> {
             window[start..nodes.start].copy_from_slice(before);
             window[nodes.clone()].copy_from_slice(own);
             window[nodes.end..end].copy_from_slice(after);
+            let mut volumes = volumes.to_vec();
             in_order(nodes.clone(), backward, |i| {
-                if let Some(p) = self.node_step(i, &window[..end], |_, _| {}) {
+                if let Some(p) = self.node_step(i, &window[..end], &mut volumes, |_, _| {}) {
                     window[i] = p;
                 }
             });
@@ -628,20 +643,28 @@ impl Solve<'_> {
     }
 
     /// Steps the nodes of `slab` in node order (`backward`: last first).
-    fn sweep_slab(&self, slab: Range<usize>, backward: bool, x: &mut [Vector]) {
+    fn sweep_slab(
+        &self,
+        slab: Range<usize>,
+        backward: bool,
+        x: &mut [Vector],
+        volumes: &mut [Real],
+    ) {
         in_order(slab, backward, |i| {
-            if let Some(p) = self.node_step(i, &*x, |_, _| {}) {
+            if let Some(p) = self.node_step(i, &*x, volumes, |_, _| {}) {
                 x[i] = p;
             }
         });
     }
 
-    /// Where node `i`'s Newton step takes it from `x` (line-searched; `None`: it stays).
+    /// Where node `i`'s Newton step takes it from `x` (line-searched; `None`: it stays), the
+    /// gas chambers at `volumes`, which follow the node's move.
     #[inline]
     fn node_step<P: Positions + ?Sized>(
         &self,
         i: usize,
         x: &P,
+        volumes: &mut [Real],
         extra: impl FnOnce(&mut Vector, &mut Matrix),
     ) -> Option<Vector> {
         let hold = self.held[i];
@@ -649,11 +672,17 @@ impl Solve<'_> {
             return None;
         }
         let inertia = (self.masses[i] + hold.carried()) / (self.h * self.h);
-        let (mut f, mut block, reach) = self.vertex.newton(i, x, inertia, self.y[i]);
+        let (mut f, mut block, reach) = self.vertex.newton(i, x, inertia, self.y[i], volumes);
         extra(&mut f, &mut block);
         let inverse = invert(block)?;
         let step = hold.constrained_step(x.at(i), inverse, f);
-        Some(self.vertex.line_search(i, x, step, hold, reach))
+        let to = self.vertex.line_search(i, x, step, hold, reach);
+        if let Some(gas) = self.vertex.gas {
+            // Exact: a chamber's volume is affine in each node.
+            let moved = to - x.at(i);
+            gas.gradients_at(i, |j| x.at(j), |c, g| volumes[c] += g.dot(moved));
+        }
+        Some(to)
     }
 
     /// Refits the held rotations of shape-based cells at `x`.
@@ -692,13 +721,14 @@ impl Solve<'_> {
         let n = x.len();
         let (h, held, vertex) = (self.h, &self.held, &self.vertex);
         let at: &[Vector] = x;
+        let volumes = self.gas_volumes(at);
         *reactions = threads::collect(n, |i| {
             if held[i] == Hold::Free {
                 return Vector::ZERO;
             }
             let inertia = self.masses[i] / (h * h);
             let inertial = self.ahead[i] + self.gravity * (h * h);
-            -vertex.newton(i, at, inertia, inertial).0
+            -vertex.newton(i, at, inertia, inertial, &volumes).0
         });
         if translate && held.iter().all(|h| *h == Hold::Free) {
             // The energy does not change under a translation, so the best one is exact: the
@@ -757,6 +787,9 @@ fn in_order(nodes: Range<usize>, backward: bool, f: impl FnMut(usize)) {
     }
 }
 
+/// The terms of a body's elastic energy: its model's, the volumetric term's, the gas's.
+type Energy<'a> = (&'a dyn ElementLaw, Option<&'a Volume>, Option<&'a Chambers>);
+
 /// The fractions of each free node's inertial motion `h v₀` a step with held nodes may start
 /// from.
 const START_FRACTIONS: [Real; 3] = [1.0, 0.5, 0.0];
@@ -766,8 +799,7 @@ const START_FRACTIONS: [Real; 3] = [1.0, 0.5, 0.0];
 /// sweeps' own objective): a few sweeps cannot undo a start that pressed the free nodes into
 /// the held ones (`docs/ARCHITECTURE.md` §4.2).
 fn start_scaled(
-    elements: &dyn ElementLaw,
-    volume: Option<&Volume>,
+    energy: Energy<'_>,
     input: &StepInput<'_>,
     (held, y): (&[Hold], &[Vector]),
     x: &mut [Vector],
@@ -779,7 +811,7 @@ fn start_scaled(
             .iter()
             .map(|&i| masses[i] * (x[i] - y[i]).length_squared())
             .sum();
-        inertia * (0.5 / (h * h)) + super::elastic_energy(elements, volume, x)
+        inertia * (0.5 / (h * h)) + super::elastic_energy(energy.0, energy.1, energy.2, x)
     };
     let motion: Vec<Vector> = free.iter().map(|&i| x[i] - x0[i]).collect();
     let (mut best, mut least) = (1.0, objective(x));
@@ -807,13 +839,7 @@ const RINGING: Real = 0.01;
 /// the stiff modes a step cannot resolve carried `h v₀` ahead flatten cells (a silicone
 /// ball's first implicit step after an impact's explicit substeps started 2 cm cells a
 /// centimetre out of shape), and a few sweeps leave most of that stored.
-fn start_rigid(
-    elements: &dyn ElementLaw,
-    volume: Option<&Volume>,
-    input: &StepInput<'_>,
-    y: &[Vector],
-    x: &mut [Vector],
-) {
+fn start_rigid(energy: Energy<'_>, input: &StepInput<'_>, y: &[Vector], x: &mut [Vector]) {
     let (x0, v0, h, masses) = (input.x0, input.v0, input.h, input.masses);
     let Some(Motion {
         velocity,
@@ -848,7 +874,7 @@ fn start_rigid(
             .zip(masses)
             .map(|((x, y), m)| m * (*x - *y).length_squared())
             .sum();
-        inertia * (0.5 / (h * h)) + super::elastic_energy(elements, volume, x)
+        inertia * (0.5 / (h * h)) + super::elastic_energy(energy.0, energy.1, energy.2, x)
     };
     if objective(&ahead) < objective(x) {
         x.copy_from_slice(&ahead);
@@ -982,6 +1008,8 @@ struct Vertex<'a> {
     shape: Option<Shape<'a>>,
     /// The volumetric term (on the same cells as the incidence's).
     volume: Option<&'a Volume>,
+    /// The gas, its pressures at the chamber volumes each Newton step is given.
+    gas: Option<&'a Chambers>,
     incidence: &'a Incidence,
     x0: &'a [Vector],
     h: Real,
@@ -997,9 +1025,17 @@ impl Vertex<'_> {
         x: &P,
         inertia: Real,
         y: Vector,
+        volumes: &[Real],
     ) -> (Vector, Matrix, Real) {
         let mut f = (y - x.at(i)) * inertia;
         let mut block = Matrix::IDENTITY * inertia;
+        if let Some(gas) = self.gas {
+            if gas.touches(i) {
+                let (df, db) = gas.node_terms(i, |j| x.at(j), volumes);
+                f += df;
+                block += db;
+            }
+        }
         if let Some(s) = self.springs {
             self.add_springs(s, i, x, &mut f, &mut block);
         }

@@ -57,6 +57,7 @@ pub mod centroid_springs;
 pub mod edge_repulsion;
 #[cfg(test)]
 mod fixtures;
+pub(crate) mod gas;
 pub mod hessian;
 mod implicit;
 mod lanes;
@@ -243,6 +244,8 @@ pub(crate) struct ModelState {
     volume: Option<volume::Volume>,
     /// The cells' rest shapes under plastic flow, if the body flows.
     plastic: Option<plastic::Plastic>,
+    /// The gas sealed in the body's chambers, if any.
+    gas: Option<gas::Chambers>,
     /// Which terms touch each node, for the implicit step (made when first needed).
     incidence: std::sync::OnceLock<Option<implicit::Incidence>>,
     #[cfg(feature = "parallel")]
@@ -351,6 +354,7 @@ impl ModelState {
         Ok(ModelState {
             volume,
             plastic,
+            gas: None,
             #[cfg(feature = "parallel")]
             split: split.filter(|_| slabs.is_none()),
             #[cfg(feature = "parallel")]
@@ -369,6 +373,9 @@ impl ModelState {
             if !self.elements.sums_volume() {
                 volume.accumulate(x, acc);
             }
+        }
+        if let Some(gas) = &self.gas {
+            gas.accumulate(x, acc);
         }
         limit
     }
@@ -420,6 +427,16 @@ impl ModelState {
         self.elements.set_rotations(rotations)
     }
 
+    /// Seals gas in `chambers` (none: the body holds no gas).
+    pub fn set_gas(&mut self, chambers: Vec<gas::Chamber>, nodes: usize) {
+        self.gas = (!chambers.is_empty()).then(|| gas::Chambers::new(chambers, nodes));
+    }
+
+    /// The body's gas chambers (empty without gas).
+    pub fn chambers(&self) -> &[gas::Chamber] {
+        self.gas.as_ref().map_or(&[], |g| g.list())
+    }
+
     /// The body's plastic flow, if it flows.
     pub fn plasticity(&self) -> Option<Plasticity> {
         self.plastic.as_ref().map(|p| p.params)
@@ -468,9 +485,9 @@ impl ModelState {
             return None;
         }
         // The rest data is still derived from the shapes before the flow.
-        let before = elastic_energy(&*self.elements, self.volume.as_ref(), x);
+        let before = elastic_energy(&*self.elements, self.volume.as_ref(), None, x);
         self.derive_rest(&changed);
-        let released = before - elastic_energy(&*self.elements, self.volume.as_ref(), x);
+        let released = before - elastic_energy(&*self.elements, self.volume.as_ref(), None, x);
         if released < 0.0 {
             if let Some(plastic) = &mut self.plastic {
                 // The same shapes as before the flow: the derived data comes back bit for bit.
@@ -482,9 +499,9 @@ impl ModelState {
         Some(released)
     }
 
-    /// Elastic (stored) energy at `x`.
+    /// Elastic (stored) energy at `x`, the gas's included.
     pub fn elastic_energy(&self, x: &[Vector]) -> Real {
-        elastic_energy(&*self.elements, self.volume.as_ref(), x)
+        elastic_energy(&*self.elements, self.volume.as_ref(), self.gas.as_ref(), x)
     }
 
     /// [`ModelState::elastic_energy`] at `x` (the same bits), with the cells' volume ratios
@@ -499,7 +516,8 @@ impl ModelState {
             |(e1, r1), (e2, r2)| (e1 + e2, r1.and(r2)),
         )
         .unwrap_or((0.0, volume::Ratios::NONE));
-        (energy + self.elements.energy(x), Some(ratios))
+        let gas = self.gas.as_ref().map_or(0.0, |g| g.energy(x));
+        (energy + self.elements.energy(x) + gas, Some(ratios))
     }
 }
 
@@ -517,18 +535,20 @@ pub(crate) fn squashed(x: &[Vector], height: Real, shear: Real) -> Vec<Vector> {
         .collect()
 }
 
-/// Elastic (stored) energy of `elements` and the volumetric term at `x`, summed by
+/// Elastic (stored) energy of `elements`, the volumetric term and the gas at `x`, summed by
 /// [`threads::chunked_sum`] (on rayon's threads for a large body, the same bits whatever the
 /// thread count).
 fn elastic_energy(
     elements: &dyn ElementLaw,
     volume: Option<&volume::Volume>,
+    gas: Option<&gas::Chambers>,
     x: &[Vector],
 ) -> Real {
     use super::threads::chunked_sum;
     volume.map_or(0.0, |v| {
         chunked_sum(v.cells().len() / SIMPLEX_ARITY, |r| v.energy_of(x, r))
     }) + elements.energy(x)
+        + gas.map_or(0.0, |g| g.energy(x))
 }
 
 /// The Poisson's ratio of a model's lattice (`Mesh::cuboid`'s mirrored Kuhn simplices, small

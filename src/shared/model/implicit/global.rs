@@ -38,6 +38,9 @@ struct Terms<'a> {
     volumes: Vec<([Vector; SIMPLEX_ARITY], Real)>,
     /// Shape-based cells (see [`ShapeCells`]).
     shape: Option<ShapeCells<'a>>,
+    /// Per gas chamber: `U''` and each of its nodes' `∂V/∂x` (the rank-one `U'' ∇V ∇Vᵀ`; the
+    /// Newton step leaves out `U' ∇²V`, which is not definite).
+    gas: Vec<(Real, Vec<(usize, Vector)>)>,
 }
 
 /// Shape-based cells for the Newton step: each cell's stiffness `k + c/h` on its vertices'
@@ -104,6 +107,12 @@ impl Terms<'_> {
                 for b in 0..a {
                     out[ids[b] as usize] += g[b] * (k * t);
                 }
+            }
+        }
+        for (curvature, nodes) in &self.gas {
+            let t: Real = nodes.iter().map(|(i, g)| g.dot(v[*i])).sum();
+            for (i, g) in nodes {
+                out[*i] += *g * (curvature * t);
             }
         }
         if let Some(shape) = &self.shape {
@@ -694,6 +703,17 @@ impl Solve<'_> {
                 turns,
             }
         });
+        let mut gas = Vec::new();
+        if let Some(chambers) = vertex.gas {
+            let list = chambers.list();
+            let mut nodes = vec![Vec::new(); list.len()];
+            for i in (0..x.len()).filter(|&i| chambers.touches(i)) {
+                chambers.gradients_at(i, |j| x[j], |c, g| nodes[c].push((i, g)));
+            }
+            for (chamber, nodes) in list.iter().zip(nodes) {
+                gas.push((chamber.law(chamber.volume(x)).1, nodes));
+            }
+        }
         Terms {
             inertia,
             springs,
@@ -701,6 +721,7 @@ impl Solve<'_> {
             repulsions,
             volumes,
             shape,
+            gas,
         }
     }
 
@@ -748,9 +769,11 @@ impl Solve<'_> {
         let free: Vec<bool> = self.held.iter().map(|h| *h == Hold::Free).collect();
         let mut r = vec![Vector::ZERO; n];
         let mut pre = vec![Matrix::ZERO; n];
+        let volumes = self.gas_volumes(x);
         for i in 0..n {
             if free[i] {
-                let (f, block, _) = self.vertex.newton(i, x, self.masses[i] / h2, self.y[i]);
+                let inertia = self.masses[i] / h2;
+                let (f, block, _) = self.vertex.newton(i, x, inertia, self.y[i], &volumes);
                 r[i] = f;
                 pre[i] = invert(block).unwrap_or(Matrix::ZERO);
             }
