@@ -130,7 +130,25 @@ impl DeformableBuilder {
     /// closed inner piece of its boundary: a hollow ball's hole, a tyre's tube), or, in a body
     /// without one, behind the outer surface of each of its pieces (the body's own volume
     /// holds the gas). [`Gas::pressure`] is the gauge pressure at the built shape; the body
-    /// inflates from there until its walls carry it. Any model; both integrators.
+    /// inflates from there until its walls carry it. Any model; every integrator.
+    /// [`Deformable::chambers`] reports each chamber's volume and pressure.
+    ///
+    /// A ball that holds its shape by gas: a hollow ball, its walls two or more cells thick.
+    ///
+    /// ```
+    /// use sinew::dim3::math::{Real, Vector};
+    /// use sinew::dim3::mesh::CellKind;
+    /// use sinew::dim3::{DeformableBuilder, Gas, Mesh};
+    ///
+    /// let hollow = Mesh::ball(0.2, 13, CellKind::Simplex)?.retain_cells(|cell| {
+    ///     let centre = cell.iter().copied().sum::<Vector>() / cell.len() as Real;
+    ///     centre.length() > 0.13
+    /// })?;
+    /// let ball = DeformableBuilder::new(hollow).gas(Gas::gauge(2e4)).build()?;
+    /// assert_eq!(ball.chambers().len(), 1);
+    /// assert_eq!(ball.chambers()[0].pressure, 2e4);
+    /// # Ok::<(), sinew::dim3::BuildError>(())
+    /// ```
     pub fn gas(mut self, gas: Gas) -> Self {
         self.gas = Some(gas);
         self
