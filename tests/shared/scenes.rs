@@ -79,3 +79,30 @@ fn a_cube_struck_deep_by_a_paddle_survives_with_calibrated_substeps() {
         assert!(r.min_vol_ratio < 0.65, "{model:?} barely struck: {r:?}");
     }
 }
+
+#[test]
+fn the_balloon_scene_squeezes_a_gas_filled_ball_that_springs_back() {
+    // sinew's ball holds its gas; rapier's peer, a volume target on its material, runs the
+    // same scene and measures its cavity the same way.
+    use crate::scenes::{BalloonScene, RapierModel};
+    let d = BalloonScene::default();
+    let run = |subject| {
+        BalloonScene {
+            cube: FallScene { subject, ..d.cube },
+            recover: 1.0,
+            ..d
+        }
+        .run()
+        .expect("scene builds")
+    };
+    let r = run(ElementModel::EdgeRepulsion.into());
+    assert!(!r.failed, "failed ({:?}): {r:?}", r.failure);
+    assert!(r.inflation.unwrap() > 1.05, "{r:?}");
+    assert!(r.gas_volume_ratio.unwrap() <= 0.7, "{r:?}");
+    assert!(r.recovery_error.unwrap() < 0.01, "{r:?}");
+    assert!(r.boyle_error.unwrap() < 1e-3, "{r:?}");
+    let rapier = run(RapierModel::Corotational.into());
+    assert!(rapier.boyle_error.is_none(), "rapier has no gas");
+    assert!(rapier.gas_volume_ratio.unwrap() < 0.72, "{rapier:?}");
+    assert!(!rapier.exploded, "{rapier:?}");
+}

@@ -101,6 +101,14 @@ pub struct Record {
     pub shape_error: Option<f64>,
     /// Volume over rest volume at the end of a static load (the crush hold).
     pub loaded_volume_ratio: Option<f64>,
+    /// The cavity's inflated volume over its built one (balloon).
+    pub inflation: Option<f64>,
+    /// The cavity's smallest volume under the plates over its inflated one (balloon).
+    pub gas_volume_ratio: Option<f64>,
+    /// `|pV/(pV)₀ − 1|` of the gas at the end (balloon; sinew only: rapier has no gas).
+    pub boyle_error: Option<f64>,
+    /// `|V/V_inflated − 1|` of the cavity at the end (balloon).
+    pub recovery_error: Option<f64>,
     /// Deepest a surface node went inside the body's own surface over the run
     /// (`metrics::self_interpenetration`, up to half a cell deep), m (fold, limb).
     pub max_self_penetration: Option<f64>,

@@ -358,7 +358,8 @@ impl DeformableBuilder {
             self.plasticity,
         )?;
         let own = self.gas.into_iter().flat_map(|g| {
-            gas::mesh_chambers(rest.mesh.boundary_facets(), rest.mesh.nodes())
+            rest.mesh
+                .chambers()
                 .into_iter()
                 .map(move |facets| (facets, g))
         });

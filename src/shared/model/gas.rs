@@ -18,6 +18,7 @@ use super::super::material::Gas;
 use super::super::math::{
     self, Matrix, Real, Vector, DIM, DIM_FACTORIAL, FACET_ARITY, SIMPLEX_ARITY,
 };
+use super::super::mesh::Mesh;
 use super::Accumulator;
 
 /// A chamber's volume is taken as at least this fraction of its built volume, so a chamber
@@ -84,17 +85,7 @@ impl Chamber {
 
     /// The enclosed volume at `x` (area in 2D).
     pub fn volume(&self, x: &[Vector]) -> Real {
-        let Some(first) = self.facets.first() else {
-            return 0.0;
-        };
-        // Measured from a point on the surface, which keeps the sum's terms small.
-        let reference = x[first[0] as usize];
-        let sum: Real = self
-            .facets
-            .iter()
-            .map(|f| measure(reference, f.map(|i| x[i as usize])))
-            .sum();
-        sum / DIM_FACTORIAL
+        Mesh::enclosed_volume(&self.facets, x)
     }
 
     /// The gauge pressure `P` and the curvature `U''` of the gas at volume `v`.
@@ -318,9 +309,34 @@ impl Chambers {
     }
 }
 
+impl Mesh {
+    /// The chambers [`DeformableBuilder::gas`](super::super::DeformableBuilder::gas) seals
+    /// its gas behind, each as facets facing out of the gas: each cavity of the mesh (a closed
+    /// piece of its boundary enclosing negative volume as the mesh orients it), or, in a mesh
+    /// with none, each piece's outer surface.
+    pub fn chambers(&self) -> Vec<Vec<[u32; FACET_ARITY]>> {
+        mesh_chambers(self.boundary_facets(), self.nodes())
+    }
+
+    /// The volume (area in 2D) that `facets`, a closed surface facing out, enclose with the
+    /// nodes at `x`: [`Deformable::chambers`](super::super::Deformable::chambers)' measure.
+    pub fn enclosed_volume(facets: &[[u32; FACET_ARITY]], x: &[Vector]) -> Real {
+        let Some(first) = facets.first() else {
+            return 0.0;
+        };
+        // Measured from a point on the surface, which keeps the sum's terms small.
+        let reference = x[first[0] as usize];
+        let sum: Real = facets
+            .iter()
+            .map(|f| measure(reference, f.map(|i| x[i as usize])))
+            .sum();
+        sum / DIM_FACTORIAL
+    }
+}
+
 /// The boundary of a mesh split into closed pieces (facets sharing a node), each piece's facets
 /// as the mesh orients them (out of the cells), with its signed volume.
-pub(crate) fn boundary_pieces(
+fn boundary_pieces(
     facets: &[[u32; FACET_ARITY]],
     nodes: &[Vector],
 ) -> Vec<(Vec<[u32; FACET_ARITY]>, Real)> {
@@ -354,25 +370,14 @@ pub(crate) fn boundary_pieces(
     pieces
         .into_iter()
         .map(|(_, list)| {
-            let reference = nodes[list[0][0] as usize];
-            let v: Real = list
-                .iter()
-                .map(|f| measure(reference, f.map(|i| nodes[i as usize])))
-                .sum::<Real>()
-                / DIM_FACTORIAL;
+            let v = Mesh::enclosed_volume(&list, nodes);
             (list, v)
         })
         .collect()
 }
 
-/// The chambers [`DeformableBuilder::gas`](super::super::DeformableBuilder::gas) makes of a
-/// mesh's boundary: each cavity (a closed piece of the boundary enclosing negative volume as
-/// the mesh orients it), turned to face out of the gas; a body with no cavity holds the gas in
-/// each of its pieces, behind its outer surface.
-pub(crate) fn mesh_chambers(
-    facets: &[[u32; FACET_ARITY]],
-    nodes: &[Vector],
-) -> Vec<Vec<[u32; FACET_ARITY]>> {
+/// [`Mesh::chambers`] of a mesh's boundary `facets`.
+fn mesh_chambers(facets: &[[u32; FACET_ARITY]], nodes: &[Vector]) -> Vec<Vec<[u32; FACET_ARITY]>> {
     let pieces = boundary_pieces(facets, nodes);
     let cavities: Vec<Vec<[u32; FACET_ARITY]>> = pieces
         .iter()
@@ -396,7 +401,7 @@ pub(crate) fn mesh_chambers(
 
 #[cfg(test)]
 mod tests {
-    use super::super::super::mesh::{CellKind, Mesh};
+    use super::super::super::mesh::CellKind;
     use super::*;
 
     fn hollow() -> Mesh {
@@ -410,7 +415,8 @@ mod tests {
     }
 
     fn chambers_of(mesh: &Mesh, gas: Gas) -> Chambers {
-        let list = mesh_chambers(mesh.boundary_facets(), mesh.nodes())
+        let list = mesh
+            .chambers()
             .into_iter()
             .enumerate()
             .map(|(k, f)| Chamber::new(k, f, gas, mesh.nodes()).unwrap())
@@ -480,7 +486,7 @@ mod tests {
     #[test]
     fn facets_that_do_not_close_or_face_into_the_gas_are_refused() {
         let mesh = hollow();
-        let mut facets = mesh_chambers(mesh.boundary_facets(), mesh.nodes()).remove(0);
+        let mut facets = mesh.chambers().remove(0);
         let gas = Gas::gauge(1e3);
         let removed = facets.pop().unwrap();
         let err = Chamber::new(0, facets.clone(), gas, mesh.nodes()).unwrap_err();

@@ -22,9 +22,11 @@
 //! | [`PinchScene`] | the box slips over 5 cm, goes over 1 cm into the ground, or a cell inverts | — |
 //! | [`RollScene`] | a cell inverts (or the ball blows up) | — |
 //! | [`FoldScene`] | the surface passes into itself (over 1 % of a cell) or a cell inverts | — |
+//! | [`BalloonScene`] | a cell inverts, the plates never squeeze the cavity, `pV` strays over 2 % (sinew) or the cavity ends over 1 % from its inflated volume | — |
 
 pub mod advise;
 mod ball;
+mod balloon;
 mod cantilever;
 mod crush;
 mod fall;
@@ -47,6 +49,7 @@ pub use crate::beam::{euler_bernoulli_tip_sag, sag_error};
 pub use crate::record::{Record, Spread};
 pub use advise::{advise, Advice, Bounds, Candidate, Trial};
 pub use ball::BallScene;
+pub use balloon::BalloonScene;
 pub use cantilever::{CantileverScene, SETTLED_WOBBLE};
 pub use crush::{CrushScene, CRUSH_MASSES};
 pub use fall::{dt_sweep, FallScene, DT_SWEEP_MS};

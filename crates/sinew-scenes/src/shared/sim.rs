@@ -13,7 +13,7 @@ use super::super::lib::DeformableBuilder;
 use super::super::lib::DeformableHandle;
 use super::super::lib::DeformableWorld;
 use super::super::lib::Integrator;
-use super::super::lib::{Material, Stiffness};
+use super::super::lib::{Gas, Material, Stiffness};
 use super::subject::{mean_edge, Subject};
 use crate::record::{Record, EXPLODED_DISTANCE, EXPLODED_SPEED};
 
@@ -56,6 +56,10 @@ pub(crate) struct BodySpec {
     pub self_contact: bool,
     /// sinew only: the rate of `DeformableBuilder::deformation_damping`, 1/s.
     pub deformation_damping: Real,
+    /// A gas sealed in the mesh's chambers (`DeformableBuilder::gas`); rapier's body gets a
+    /// volume target on its material instead, `(p + p_a)/p_a` of its rest volume (rapier 0.36
+    /// has no gas).
+    pub gas: Option<Gas>,
 }
 
 impl BodySpec {
@@ -71,6 +75,7 @@ impl BodySpec {
             pins: Vec::new(),
             self_contact: false,
             deformation_damping: 0.0,
+            gas: None,
         }
     }
 }
@@ -143,7 +148,7 @@ pub(crate) fn insert_soft(
     Ok(match subject {
         Subject::Sinew(model) => {
             world.pipeline.settings.fixed_substeps = fixed_substeps;
-            let body = DeformableBuilder::new(mesh.clone())
+            let mut body = DeformableBuilder::new(mesh.clone())
                 .model(model)
                 .material(spec.material)
                 .stiffness(spec.stiffness)
@@ -152,8 +157,11 @@ pub(crate) fn insert_soft(
                 .translation(spec.translation)
                 .rotation(spec.rotation)
                 .self_contact(spec.self_contact)
-                .deformation_damping(spec.deformation_damping)
-                .build()?;
+                .deformation_damping(spec.deformation_damping);
+            if let Some(gas) = spec.gas {
+                body = body.gas(gas);
+            }
+            let body = body.build()?;
             let h = world.insert(body);
             for (body, nodes) in &spec.pins {
                 world
@@ -178,7 +186,6 @@ pub(crate) fn insert_soft(
                 .collect();
             let edges: Vec<[u32; 2]> = mesh.vertex_pairs().iter().map(|(e, _)| *e).collect();
             let pinned: Vec<u32> = pins.to_vec();
-            #[allow(unused_mut)]
             let mut builder = SoftBodyBuilder::new(rest.to_vec())
                 .cells(cells)
                 .masses(masses.to_vec())
@@ -192,6 +199,11 @@ pub(crate) fn insert_soft(
                 .particle_radius(RAPIER_SKIN)
                 .pinned_particles(pinned)
                 .can_sleep(false);
+            if let Some(gas) = spec.gas {
+                builder = builder.volume_preservation(true).volume_factor(
+                    (gas.pressure + gas.ambient) / gas.ambient.max(Real::MIN_POSITIVE),
+                );
+            }
             #[cfg(feature = "fem")]
             {
                 builder = builder.solver(model.solver());
