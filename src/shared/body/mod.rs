@@ -243,6 +243,13 @@ impl Deformable {
         self.state.elements.plasticity()
     }
 
+    /// Each cell's plastic strain, the largest magnitude of the principal log strains of its
+    /// rest shape against its built one (the set it keeps; `ColorField::PlasticStrain` draws
+    /// it); empty if the body does not flow.
+    pub fn plastic_strains(&self) -> Vec<Real> {
+        self.state.elements.plastic_strains()
+    }
+
     /// Each gas chamber's volume (area in 2D) and gauge pressure now
     /// ([`DeformableBuilder::gas`](super::DeformableBuilder::gas)); empty without gas.
     pub fn chambers(&self) -> Vec<ChamberState> {

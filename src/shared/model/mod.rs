@@ -442,6 +442,12 @@ impl ModelState {
         self.plastic.as_ref().map(|p| p.params)
     }
 
+    /// Each cell's plastic strain ([`plastic::Plastic::strains`]); empty if the body does not
+    /// flow.
+    pub fn plastic_strains(&self) -> Vec<Real> {
+        self.plastic.as_ref().map_or(Vec::new(), |p| p.strains())
+    }
+
     /// Each cell's rest vertices (by slot) under plastic flow; empty if the body does not
     /// flow.
     #[cfg_attr(not(feature = "serde"), allow(dead_code))]

@@ -104,6 +104,20 @@ impl Plastic {
             .collect()
     }
 
+    /// Each cell's plastic strain: the largest magnitude of the principal log strains of its
+    /// rest shape against its built shape.
+    pub fn strains(&self) -> Vec<Real> {
+        (0..self.rest.len() / SIMPLEX_ARITY)
+            .map(|c| {
+                let slots = c * SIMPLEX_ARITY..(c + 1) * SIMPLEX_ARITY;
+                let plastic =
+                    edges(&self.rest[slots.clone()]) * edges(&self.built[slots]).inverse();
+                let strains = principal_strains(plastic);
+                (0..DIM).map(|k| strains[k].abs()).fold(0.0, Real::max)
+            })
+            .collect()
+    }
+
     /// Flows the cells at `x` over a step of `dt`: the cells whose rest shape changed, in
     /// order.
     pub fn flow(&mut self, x: &[Vector], dt: Real) -> Vec<u32> {

@@ -29,7 +29,9 @@
 //! `r` of its cells: white at rest, red as it is compressed (full red at
 //! `r ≤ 1 − color_range`), blue as it is stretched (full blue at `r ≥ 1 + color_range`);
 //! [`ColorField::Strain`] by the mean `|L/L0 − 1|` of its incident vertex pairs (white 0 → full
-//! red at `color_range`; a stress proxy is this times Young's modulus, so it is drawn the same).
+//! red at `color_range`; a stress proxy is this times Young's modulus, so it is drawn the same);
+//! [`ColorField::PlasticStrain`] by the largest plastic strain of its cells (white 0 → full
+//! orange at `color_range`; white everywhere on a body that does not flow).
 //! A vertex of a collapsed or inverted cell is magenta in either case. The range is
 //! [`RecorderOptions::color_range`], 0.1 by default: the main demo's impact (smallest volume
 //! ratio about 0.95) shows half red. The `legend` entity says all this in the recording.
@@ -67,6 +69,9 @@ pub enum ColorField {
     VolumeRatio,
     /// Mean relative length change of the vertex's incident vertex pairs.
     Strain,
+    /// Largest plastic strain of the vertex's cells ([`Deformable::plastic_strains`]): the
+    /// set a plastic body keeps.
+    PlasticStrain,
 }
 
 /// What to log.
@@ -167,6 +172,9 @@ struct DeformableLog {
     /// Quality of each cell at the last frame (of the surface cells only, unless every node is
     /// coloured).
     quality: Vec<Real>,
+    /// Each cell's plastic strain at the last frame (empty unless the plastic field is drawn
+    /// and the body flows).
+    plastic: Vec<Real>,
     facets: Vec<[u32; FACET_ARITY]>,
     /// Per node (CSR): incident cells.
     cell_start: Vec<u32>,
@@ -210,6 +218,7 @@ const CONTACT: [u8; 3] = [40, 200, 90];
 const WIRE: [u8; 3] = [60, 60, 70];
 const REST: [f32; 3] = [235.0, 235.0, 235.0];
 const COMPRESSED: [f32; 3] = [215.0, 30.0, 30.0];
+const PLASTIC: [f32; 3] = [230.0, 120.0, 20.0];
 const STRETCHED: [f32; 3] = [40.0, 90.0, 220.0];
 
 fn rgb(c: [u8; 3]) -> Color {
@@ -467,6 +476,10 @@ impl RerunRecorder {
             ColorField::Strain => {
                 format!("mean edge strain at the node: **white** 0, **red** full at {r:.2}")
             }
+            ColorField::PlasticStrain => format!(
+                "largest plastic strain of the node's cells (the set kept): **white** 0, \
+                 **orange** full at {r:.2}"
+            ),
         };
         let wire = if self.options.wireframe {
             "Dark lines: surface edges; yellow"
@@ -573,6 +586,7 @@ impl DeformableLog {
             wire_strips,
             surface_cells,
             quality: vec![1.0; mesh.num_cells()],
+            plastic: Vec::new(),
             facets,
             cell_start: count,
             cells,
@@ -643,6 +657,13 @@ impl DeformableLog {
                     / pairs.len().max(1) as Real;
                 lerp(REST, COMPRESSED, strain / range)
             }
+            ColorField::PlasticStrain => {
+                let set = cells
+                    .iter()
+                    .filter_map(|&c| self.plastic.get(c as usize))
+                    .fold(0.0, |a: Real, b| a.max(*b));
+                lerp(REST, PLASTIC, set / range)
+            }
         }
     }
 
@@ -695,6 +716,9 @@ impl DeformableLog {
             self.topology_logged = true;
         }
         self.refresh_quality(body, options.nodes);
+        if options.color_field == ColorField::PlasticStrain {
+            self.plastic = body.plastic_strains();
+        }
         let x = body.positions();
         let vertices: Vec<Vector> = self.surface.iter().map(|&i| x[i as usize]).collect();
         let colors: Vec<Color> = self
