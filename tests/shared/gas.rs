@@ -311,6 +311,73 @@ fn bad_gas_and_chambers_that_leak_or_face_inwards_are_refused() {
     assert_eq!(given.chambers(), found.chambers());
 }
 
+#[test]
+fn a_chamber_pumped_up_swells_and_let_out_shrinks() {
+    // A pneumatic valve: the chamber's gas set to a new gauge pressure at its volume now. The
+    // ball swells to a new rest where its walls carry the higher pressure (at most the pumped
+    // one, since it falls as the ball swells), and shrinks when let out.
+    let mut world = weightless(INTEGRATORS[1]);
+    let body = DeformableBuilder::new(hollow_ball())
+        .material(rubber())
+        .deformation_damping(5.0)
+        .gas(Gas::gauge(1e4))
+        .build()
+        .unwrap();
+    let h = world.insert(body);
+    let settle = |world: &mut DeformableWorld| {
+        for _ in 0..60 {
+            world.step();
+        }
+        world.deformables[h].chambers()[0]
+    };
+    let low = settle(&mut world);
+    world.deformables[h]
+        .set_chamber_pressure(0, Gas::gauge(3e4))
+        .unwrap();
+    assert_eq!(world.deformables[h].chambers()[0].pressure, 3e4);
+    let high = settle(&mut world);
+    assert!(high.volume > 1.05 * low.volume, "{low:?} → {high:?}");
+    assert!(
+        high.pressure > low.pressure && high.pressure < 3e4,
+        "{high:?}"
+    );
+    // Let out to suction: less gas than it started with, so it ends smaller than then.
+    world.deformables[h]
+        .set_chamber_pressure(0, Gas::gauge(-2e4))
+        .unwrap();
+    let out = settle(&mut world);
+    assert!(out.volume < low.volume, "{out:?}");
+    // Refused, and the body unchanged.
+    let d = &mut world.deformables[h];
+    let err = d.set_chamber_pressure(1, Gas::gauge(1e3)).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            BuildError::InvalidParameter {
+                name: "chamber",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let bad = Gas {
+        pressure: Real::NAN,
+        ambient: Gas::ATMOSPHERE,
+    };
+    let err = d.set_chamber_pressure(0, bad).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            BuildError::InvalidParameter {
+                name: "Gas::pressure",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert_eq!(d.chambers()[0], out);
+}
+
 /// A snapshot of a squeezed balloon continues bit for bit, its gas with it.
 #[cfg(feature = "serde")]
 #[test]

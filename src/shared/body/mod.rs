@@ -4,7 +4,7 @@ use super::attach::{self, AttachError, Attachment, Bindings};
 use super::contact::{ContactMaterial, ContactPoint};
 use super::embedding::Embedding;
 use super::error::BuildError;
-use super::material::{Material, Plasticity, Stiffness};
+use super::material::{Gas, Material, Plasticity, Stiffness};
 use super::math::{self, AngVector, Real, Vector, DIM};
 use super::mesh::Mesh;
 use super::model::volume::Ratios;
@@ -267,6 +267,29 @@ impl Deformable {
                 }
             })
             .collect()
+    }
+
+    /// Pumps gas into chamber `chamber` (or lets it out) so that its gauge pressure is
+    /// `gas.pressure` now, against `gas.ambient`: a pneumatic actuator's valve. The gas's stored
+    /// energy changes by the pump's work. A bad pressure is `BuildError::InvalidParameter`
+    /// naming the field, a chamber the body does not have one naming `chamber`; neither changes
+    /// the body.
+    pub fn set_chamber_pressure(&mut self, chamber: usize, gas: Gas) -> Result<(), BuildError> {
+        let x = &self.state.positions;
+        let chambers = self.state.elements.chambers_mut();
+        let Some(c) = chambers.get_mut(chamber) else {
+            return Err(BuildError::InvalidParameter {
+                name: "chamber",
+                value: chamber as Real,
+                expected: "the index of one of the body's gas chambers",
+            });
+        };
+        let volume = c.volume(x);
+        c.refill(gas, volume)?;
+        self.step.forces_valid = false;
+        self.step.energy_memo.at.clear();
+        self.wake_up();
+        Ok(())
     }
 
     /// Number of cells that are collapsed or inverted now (quality ≤ 0).

@@ -88,6 +88,16 @@ impl Chamber {
         Mesh::enclosed_volume(&self.facets, x)
     }
 
+    /// Pumps gas in or out so that at volume `v` its gauge pressure is `gas.pressure` against
+    /// `gas.ambient`; the built volume (the energy's zero) stays.
+    pub fn refill(&mut self, gas: Gas, v: Real) -> Result<(), BuildError> {
+        gas.validate()?;
+        let v = v.max(MIN_VOLUME * self.v0);
+        self.pv = (gas.pressure + gas.ambient) * v;
+        self.ambient = gas.ambient;
+        Ok(())
+    }
+
     /// The gauge pressure `P` and the curvature `U''` of the gas at volume `v`.
     pub fn law(&self, v: Real) -> (Real, Real) {
         let v = v.max(MIN_VOLUME * self.v0);
@@ -211,6 +221,11 @@ impl Chambers {
     /// The chambers.
     pub fn list(&self) -> &[Chamber] {
         &self.chambers
+    }
+
+    /// The chambers, to refill.
+    pub fn list_mut(&mut self) -> &mut [Chamber] {
+        &mut self.chambers
     }
 
     /// Each chamber's volume at `x`.

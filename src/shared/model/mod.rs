@@ -437,6 +437,11 @@ impl ModelState {
         self.gas.as_ref().map_or(&[], |g| g.list())
     }
 
+    /// The body's gas chambers, to refill (empty without gas).
+    pub fn chambers_mut(&mut self) -> &mut [gas::Chamber] {
+        self.gas.as_mut().map_or(&mut [], |g| g.list_mut())
+    }
+
     /// The body's plastic flow, if it flows.
     pub fn plasticity(&self) -> Option<Plasticity> {
         self.plastic.as_ref().map(|p| p.params)
