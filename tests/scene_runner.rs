@@ -69,6 +69,10 @@ const KEYS: &[(&str, &str)] = &[
     ("sag_theory", "f?"),
     ("sag_error", "f?"),
     ("sag_wobble", "f?"),
+    ("inflation", "f?"),
+    ("gas_volume_ratio", "f?"),
+    ("boyle_error", "f?"),
+    ("recovery_error", "f?"),
     ("final_kinetic_energy", "f"),
     ("nan", "b"),
     ("exploded", "b"),
@@ -194,6 +198,35 @@ fn crush_sweeps_masses_and_measures_recovery() {
             .as_f64()
             .is_some_and(|v| v > 0.0 && v < 1.0));
     }
+}
+
+#[test]
+fn the_balloon_squeezes_sinews_gas_and_rapiers_volume_target() {
+    let lines = run(&[
+        "balloon",
+        "--dim",
+        "2",
+        "--model",
+        "edge-repulsion",
+        "rapier-corotational",
+    ]);
+    assert_eq!(lines.len(), 2);
+    for l in &lines {
+        assert_eq!(l["scene"], "balloon");
+        assert!(l["gas_volume_ratio"].as_f64().is_some_and(|v| v < 0.72));
+        assert!(l["inflation"].as_f64().is_some_and(|v| v > 1.0));
+    }
+    let sinew = lines
+        .iter()
+        .find(|l| l["model"] == "edge-repulsion")
+        .unwrap();
+    assert!(sinew["boyle_error"].as_f64().is_some_and(|e| e < 0.02));
+    assert_eq!(sinew["failed"], false, "{sinew:?}");
+    let rapier = lines
+        .iter()
+        .find(|l| l["model"] != "edge-repulsion")
+        .unwrap();
+    assert!(rapier["boyle_error"].is_null(), "rapier has no gas");
 }
 
 #[test]
