@@ -155,6 +155,15 @@ pub enum BuildError {
         /// Number of nodes in the mesh.
         node_count: usize,
     },
+    /// A gas chamber's facet joins nodes that share no cell: a chamber's facets must lie in
+    /// the mesh's cells (a boundary facet, or a face or diagonal inside a cell).
+    #[error("chamber {chamber}'s facet {facet} joins nodes that share no cell; a chamber's facets must lie in the mesh's cells")]
+    ChamberFacetOutsideCells {
+        /// The chamber (in the order the builder was given them).
+        chamber: usize,
+        /// The offending facet.
+        facet: usize,
+    },
     /// A gas chamber's facets do not close: a ridge (an edge in 3D, a node in 2D) is not met
     /// once each way by its facets, so the gas would leak there.
     #[error("chamber {chamber} is open at nodes {ridge:?}: its facets must close, each ridge met once each way")]

@@ -257,7 +257,7 @@ mod imp {
                 })?;
             }
             let gas = self.gas.into_owned();
-            if let Some(k) = gas.iter().position(|c| !c.fits(n)) {
+            if let Some(k) = gas.iter().position(|c| !c.fits(&rest.mesh)) {
                 return Err(format!(
                     "gas chamber {k} does not fit the mesh or is out of range"
                 ));

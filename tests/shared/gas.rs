@@ -276,6 +276,24 @@ fn bad_gas_and_chambers_that_leak_or_face_inwards_are_refused() {
         matches!(err, BuildError::InvertedChamber { chamber: 1, .. }),
         "{err}"
     );
+    // A facet between nodes that share no cell (a node of the outer surface in a facet of
+    // the cavity).
+    let outer = (0..mesh.nodes().len())
+        .find(|&i| mesh.nodes()[i].length() > 0.95 * OUTER)
+        .unwrap() as u32;
+    let mut across = cavity.clone();
+    across[2][0] = outer;
+    let err = build(DeformableBuilder::new(mesh.clone()).chamber(across, Gas::gauge(1e3)));
+    assert!(
+        matches!(
+            err,
+            BuildError::ChamberFacetOutsideCells {
+                chamber: 0,
+                facet: 2
+            }
+        ),
+        "{err}"
+    );
     let mut far = cavity.clone();
     far[3][1] = mesh.nodes().len() as u32;
     let err = build(DeformableBuilder::new(mesh.clone()).chamber(far, Gas::gauge(1e3)));

@@ -158,10 +158,12 @@ impl DeformableBuilder {
     /// each facet facing out of the gas as the mesh's boundary faces out of its cells:
     /// counter-clockwise seen from the walls in 3D; a 2D segment `[a, b]` has the gas on its
     /// right): a pneumatic pad's chambers, each at its own
-    /// pressure. The facets need not be on the boundary, but must close around a positive
-    /// volume: [`BuildError::OpenChamber`], [`BuildError::InvertedChamber`] and
-    /// [`BuildError::ChamberIndexOutOfRange`] name the chamber (counted from 0 in the order
-    /// given, after the [`DeformableBuilder::gas`] ones) otherwise.
+    /// pressure. The facets need not be on the boundary, but must lie in the cells (each
+    /// facet's nodes share a cell) and close around a positive volume:
+    /// [`BuildError::ChamberFacetOutsideCells`], [`BuildError::OpenChamber`],
+    /// [`BuildError::InvertedChamber`] and [`BuildError::ChamberIndexOutOfRange`] name the
+    /// chamber (counted from 0 in the order given, after the [`DeformableBuilder::gas`] ones)
+    /// otherwise.
     pub fn chamber(mut self, facets: Vec<[u32; FACET_ARITY]>, gas: Gas) -> Self {
         self.chambers.push((facets, gas));
         self
@@ -366,7 +368,7 @@ impl DeformableBuilder {
         let chambers = own
             .chain(self.chambers)
             .enumerate()
-            .map(|(k, (facets, g))| gas::Chamber::new(k, facets, g, rest.mesh.nodes()))
+            .map(|(k, (facets, g))| gas::Chamber::new(k, facets, g, &rest.mesh))
             .collect::<Result<Vec<_>, _>>()?;
         elements.set_gas(chambers, n);
         let positions: Vec<Vector> = rest

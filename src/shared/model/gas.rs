@@ -40,15 +40,16 @@ pub(crate) struct Chamber {
 }
 
 impl Chamber {
-    /// The chamber of `gas` behind `facets` (by node of `nodes`, facing out of the gas);
+    /// The chamber of `gas` behind `facets` (by node of `mesh`, facing out of the gas);
     /// `index` names it in errors.
     pub fn new(
         index: usize,
         facets: Vec<[u32; FACET_ARITY]>,
         gas: Gas,
-        nodes: &[Vector],
+        mesh: &Mesh,
     ) -> Result<Chamber, BuildError> {
         gas.validate()?;
+        let nodes = mesh.nodes();
         for (f, facet) in facets.iter().enumerate() {
             if let Some(&bad) = facet.iter().find(|&&i| i as usize >= nodes.len()) {
                 return Err(BuildError::ChamberIndexOutOfRange {
@@ -58,6 +59,12 @@ impl Chamber {
                     node_count: nodes.len(),
                 });
             }
+        }
+        if let Some(f) = outside_cells(&facets, mesh) {
+            return Err(BuildError::ChamberFacetOutsideCells {
+                chamber: index,
+                facet: f,
+            });
         }
         if let Some(ridge) = open_ridge(&facets) {
             return Err(BuildError::OpenChamber {
@@ -113,9 +120,11 @@ impl Chamber {
     /// Whether the chamber's nodes are among `nodes` and its numbers in range (a restored
     /// snapshot's).
     #[cfg_attr(not(feature = "serde"), allow(dead_code))]
-    pub fn fits(&self, nodes: usize) -> bool {
+    pub fn fits(&self, mesh: &Mesh) -> bool {
         let finite = |v: Real| v.is_finite() && v > 0.0;
+        let nodes = mesh.nodes().len();
         self.facets.iter().flatten().all(|&i| (i as usize) < nodes)
+            && outside_cells(&self.facets, mesh).is_none()
             && finite(self.pv)
             && finite(self.v0)
             && self.ambient.is_finite()
@@ -151,6 +160,44 @@ fn facet_gradient(p: [Vector; FACET_ARITY], slot: usize) -> Vector {
     let q: [Vector; SIMPLEX_ARITY] =
         std::array::from_fn(|k| if k == 0 { p[slot] } else { p[k - 1] });
     math::simplex_gradients(&q).1[slot + 1] * ORIENTATION
+}
+
+/// The first of `facets` whose nodes are not all nodes of one cell of `mesh`, if any (the
+/// implicit step's slabs see a node's cell neighbours only). Every node index must be in range.
+fn outside_cells(facets: &[[u32; FACET_ARITY]], mesh: &Mesh) -> Option<usize> {
+    use std::collections::HashSet;
+    let mut within: HashSet<[u32; FACET_ARITY]> = HashSet::new();
+    for cell in mesh.cells() {
+        // Every choice of FACET_ARITY of the cell's vertices, sorted.
+        let n = cell.len();
+        let mut pick = [0usize; FACET_ARITY];
+        fn choose(
+            cell: &[u32],
+            from: usize,
+            depth: usize,
+            pick: &mut [usize; FACET_ARITY],
+            out: &mut HashSet<[u32; FACET_ARITY]>,
+        ) {
+            if depth == FACET_ARITY {
+                let mut key = pick.map(|k| cell[k]);
+                key.sort_unstable();
+                out.insert(key);
+                return;
+            }
+            for k in from..cell.len() {
+                pick[depth] = k;
+                choose(cell, k + 1, depth + 1, pick, out);
+            }
+        }
+        if n >= FACET_ARITY {
+            choose(cell, 0, 0, &mut pick, &mut within);
+        }
+    }
+    facets.iter().position(|f| {
+        let mut key = *f;
+        key.sort_unstable();
+        !within.contains(&key)
+    })
 }
 
 /// The first ridge of `facets` not met once each way, if any: an edge `(a, b)` in 3D whose
@@ -434,7 +481,7 @@ mod tests {
             .chambers()
             .into_iter()
             .enumerate()
-            .map(|(k, f)| Chamber::new(k, f, gas, mesh.nodes()).unwrap())
+            .map(|(k, f)| Chamber::new(k, f, gas, mesh).unwrap())
             .collect();
         Chambers::new(list, mesh.nodes().len())
     }
@@ -504,7 +551,7 @@ mod tests {
         let mut facets = mesh.chambers().remove(0);
         let gas = Gas::gauge(1e3);
         let removed = facets.pop().unwrap();
-        let err = Chamber::new(0, facets.clone(), gas, mesh.nodes()).unwrap_err();
+        let err = Chamber::new(0, facets.clone(), gas, &mesh).unwrap_err();
         assert!(
             matches!(err, BuildError::OpenChamber { chamber: 0, .. }),
             "{err}"
@@ -518,14 +565,14 @@ mod tests {
                 f
             })
             .collect();
-        let err = Chamber::new(2, inside_out, gas, mesh.nodes()).unwrap_err();
+        let err = Chamber::new(2, inside_out, gas, &mesh).unwrap_err();
         assert!(
             matches!(err, BuildError::InvertedChamber { chamber: 2, .. }),
             "{err}"
         );
         let mut far = facets.clone();
         far[0][0] = 1_000_000;
-        let err = Chamber::new(1, far, gas, mesh.nodes()).unwrap_err();
+        let err = Chamber::new(1, far, gas, &mesh).unwrap_err();
         assert!(
             matches!(
                 err,
@@ -537,7 +584,7 @@ mod tests {
             ),
             "{err}"
         );
-        let err = Chamber::new(0, facets, Gas::gauge(-2e5), mesh.nodes()).unwrap_err();
+        let err = Chamber::new(0, facets, Gas::gauge(-2e5), &mesh).unwrap_err();
         assert!(matches!(
             err,
             BuildError::InvalidParameter {
