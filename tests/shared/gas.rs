@@ -1,6 +1,6 @@
 //! Gas sealed in a body (issue 31, acceptance 3 and 4).
 
-use crate::dim::math::{Pose, Real, Vector, DIM};
+use crate::dim::math::{Pose, Real, Vector, DIM, FACET_ARITY};
 use crate::dim::mesh::CellKind;
 use crate::dim::rapier::prelude::{
     ColliderBuilder, Cuboid, RigidBodyBuilder, RigidBodyHandle, SharedShape,
@@ -91,6 +91,18 @@ fn set_gap(world: &mut DeformableWorld, plates: [RigidBodyHandle; 2], gap: Real)
         at[1] = side * (gap / 2.0 + 0.05);
         world.physics.bodies[plate].set_next_kinematic_position(Pose::from_translation(at));
     }
+}
+
+/// `facets` facing the other way (each with its first two nodes swapped).
+fn flipped(facets: &[[u32; FACET_ARITY]]) -> Vec<[u32; FACET_ARITY]> {
+    facets
+        .iter()
+        .map(|f| {
+            let mut f = *f;
+            f.swap(0, 1);
+            f
+        })
+        .collect()
 }
 
 /// Whether `err` refuses the parameter `name`.
@@ -244,12 +256,9 @@ fn bad_gas_and_chambers_that_leak_or_face_inwards_are_refused() {
             f.iter()
                 .all(|&i| mesh.nodes()[i as usize].length() < 0.5 * (INNER + OUTER))
         })
-        .map(|f| {
-            let mut f = *f;
-            f.swap(0, 1);
-            f
-        })
+        .copied()
         .collect();
+    let cavity = flipped(&cavity);
     assert!(cavity.len() > 10);
     let mut open = cavity.clone();
     open.pop();
@@ -259,14 +268,7 @@ fn bad_gas_and_chambers_that_leak_or_face_inwards_are_refused() {
         "{err}"
     );
     // As the mesh orients it, it faces into the gas.
-    let inwards: Vec<_> = cavity
-        .iter()
-        .map(|f| {
-            let mut f = *f;
-            f.swap(0, 1);
-            f
-        })
-        .collect();
+    let inwards = flipped(&cavity);
     let err = build(
         DeformableBuilder::new(mesh.clone())
             .gas(Gas::gauge(1e3))

@@ -45,17 +45,16 @@ fn pulled() -> Bar {
     }
 }
 
-/// `bar` under `model` and `integrator`, its end faces bound to two kinematic bones (left,
-/// right) that start where the ends are.
-fn bar_of(
-    bar: Bar,
-    model: ElementModel,
-    integrator: Integrator,
-) -> (
+/// A bar's world, the bar, and its two bones (left, right).
+type BarWorld = (
     DeformableWorld,
     DeformableHandle,
     [crate::dim::rapier::prelude::RigidBodyHandle; 2],
-) {
+);
+
+/// `bar` under `model` and `integrator`, its end faces bound to two kinematic bones (left,
+/// right) that start where the ends are.
+fn bar_of(bar: Bar, model: ElementModel, integrator: Integrator) -> BarWorld {
     let (mut world, left) = weightless_with_bone();
     world.pipeline.settings.integrator = integrator;
     let right = world
@@ -89,14 +88,7 @@ fn bar_of(
 }
 
 /// [`pulled`] under `model` and `integrator`.
-fn bar(
-    model: ElementModel,
-    integrator: Integrator,
-) -> (
-    DeformableWorld,
-    DeformableHandle,
-    [crate::dim::rapier::prelude::RigidBodyHandle; 2],
-) {
+fn bar(model: ElementModel, integrator: Integrator) -> BarWorld {
     bar_of(pulled(), model, integrator)
 }
 

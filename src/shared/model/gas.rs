@@ -438,21 +438,25 @@ fn boundary_pieces(
         .collect()
 }
 
+/// `facets` facing the other way (each with its first two nodes swapped).
+fn flipped(facets: &[[u32; FACET_ARITY]]) -> Vec<[u32; FACET_ARITY]> {
+    facets
+        .iter()
+        .map(|f| {
+            let mut f = *f;
+            f.swap(0, 1);
+            f
+        })
+        .collect()
+}
+
 /// [`Mesh::chambers`] of a mesh's boundary `facets`.
 fn mesh_chambers(facets: &[[u32; FACET_ARITY]], nodes: &[Vector]) -> Vec<Vec<[u32; FACET_ARITY]>> {
     let pieces = boundary_pieces(facets, nodes);
     let cavities: Vec<Vec<[u32; FACET_ARITY]>> = pieces
         .iter()
         .filter(|(_, v)| *v < 0.0)
-        .map(|(list, _)| {
-            list.iter()
-                .map(|f| {
-                    let mut f = *f;
-                    f.swap(0, 1);
-                    f
-                })
-                .collect()
-        })
+        .map(|(list, _)| flipped(list))
         .collect();
     if cavities.is_empty() {
         pieces.into_iter().map(|(list, _)| list).collect()
@@ -557,14 +561,7 @@ mod tests {
             "{err}"
         );
         facets.push(removed);
-        let inside_out: Vec<_> = facets
-            .iter()
-            .map(|f| {
-                let mut f = *f;
-                f.swap(0, 1);
-                f
-            })
-            .collect();
+        let inside_out = flipped(&facets);
         let err = Chamber::new(2, inside_out, gas, &mesh).unwrap_err();
         assert!(
             matches!(err, BuildError::InvertedChamber { chamber: 2, .. }),
