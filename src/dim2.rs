@@ -362,6 +362,7 @@ pub(crate) mod render {
         _rec: &RecordingStream,
         _path: &str,
         _facets: &[[u32; 2]],
+        _changes: bool,
     ) -> RecordingStreamResult<()> {
         Ok(())
     }

@@ -454,16 +454,20 @@ pub(crate) mod render {
         v.to_array()
     }
 
-    /// The surface topology, once: triangles over the surface vertices.
+    /// The surface topology: triangles over the surface vertices, static, or on the timeline
+    /// if it `changes` (a body that tears logs it again after each tear).
     pub fn surface_topology(
         rec: &RecordingStream,
         path: &str,
         facets: &[[u32; 3]],
+        changes: bool,
     ) -> RecordingStreamResult<()> {
-        rec.log_static(
-            path,
-            &Mesh3D::update_fields().with_triangle_indices(facets.iter().copied()),
-        )
+        let topology = Mesh3D::update_fields().with_triangle_indices(facets.iter().copied());
+        if changes {
+            rec.log(path, &topology)
+        } else {
+            rec.log_static(path, &topology)
+        }
     }
 
     /// The surface of one frame: vertex positions and colours.

@@ -117,6 +117,15 @@ impl Embedding {
         }
     }
 
+    /// Takes each vertex's cell's nodes from `mesh` again, after a tear gave some cells
+    /// copies of their nodes (cells keep their indices).
+    pub(crate) fn rebind(&mut self, mesh: &Mesh) {
+        let ids = mesh.cell_indices();
+        for (nodes, &c) in self.nodes.iter_mut().zip(&self.cells) {
+            *nodes = std::array::from_fn(|k| ids[c as usize * SIMPLEX_ARITY + k]);
+        }
+    }
+
     /// Whether the embedding is whole and binds to nodes below `nodes` (a snapshot's check).
     #[cfg(feature = "serde")]
     pub(crate) fn check(&self, nodes: usize) -> Result<(), String> {

@@ -182,6 +182,18 @@ pub enum BuildError {
         /// The signed volume its facets enclose at rest.
         volume: Real,
     },
+    /// A tearing body's tear strain is at or below its plastic yield strain: it would tear
+    /// before it flows.
+    #[error("tear strain {tear} is at or below the yield strain {yield_strain}: a body must yield before it tears")]
+    TearBelowYield {
+        /// The tear strain asked.
+        tear: Real,
+        /// The plastic flow's yield strain.
+        yield_strain: Real,
+    },
+    /// Tearing was asked of a body with gas chambers: a crack would open a chamber.
+    #[error("a body with gas chambers cannot tear (a crack would open a chamber)")]
+    TearingWithGas,
     /// The element model cannot be built on this cell kind.
     #[error("the {model} model needs simplex cells (triangles / tetrahedra), but the mesh has {kind} cells; build the lattice with CellKind::Simplex")]
     UnsupportedCells {

@@ -127,6 +127,61 @@ impl Plasticity {
     }
 }
 
+/// Tearing: a body splits along the faces between its cells where it is stretched past
+/// `strain` (`docs/ARCHITECTURE.md` §3.8). The nodes of a face that tears are duplicated where
+/// the crack has cut the cells around them apart, so the pieces move on independently, within
+/// the one body.
+///
+/// The strain is logarithmic, as [`Plasticity`]'s: `ln λ` of the stretch `λ` across the face
+/// (each of its two cells' deformation applied to the face's rest normal, the two lengths
+/// averaged), against the cells' current rest shapes.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Tearing {
+    /// The log strain across a face at which it tears (> 0, finite; above a plastic body's
+    /// yield strain).
+    pub strain: Real,
+    /// The fewest cells a piece torn off may have (≥ 1): a tear that would leave a smaller
+    /// piece does not happen, so a body does not shed dust.
+    pub smallest_piece: usize,
+}
+
+impl Tearing {
+    /// Tears past `strain`, leaving pieces of at least 4 cells.
+    pub fn at(strain: Real) -> Tearing {
+        Tearing {
+            strain,
+            smallest_piece: 4,
+        }
+    }
+
+    /// Checks the parameters, against the body's plastic flow if it has one.
+    pub(crate) fn validate(&self, plasticity: Option<&Plasticity>) -> Result<(), BuildError> {
+        let s = self.strain;
+        if !(s.is_finite() && s > 0.0) {
+            return Err(BuildError::InvalidParameter {
+                name: "Tearing::strain",
+                value: s,
+                expected: "a finite log strain above 0",
+            });
+        }
+        if self.smallest_piece == 0 {
+            return Err(BuildError::InvalidParameter {
+                name: "Tearing::smallest_piece",
+                value: 0.0,
+                expected: "at least 1 cell",
+            });
+        }
+        match plasticity {
+            Some(p) if s <= p.yield_strain => Err(BuildError::TearBelowYield {
+                tear: s,
+                yield_strain: p.yield_strain,
+            }),
+            _ => Ok(()),
+        }
+    }
+}
+
 /// A gas sealed in a body's chambers, held by the isothermal law `p V = const`: balls, balloons,
 /// tyres, pneumatic pads (`docs/ARCHITECTURE.md` §3.7). The gas pushes each chamber's walls out
 /// with its pressure over the ambient one.

@@ -32,9 +32,11 @@ pub use body::{ChamberState, Deformable, DeformableBuilder};
 pub use contact::ContactPoint;
 pub use embedding::Embedding;
 pub use error::BuildError;
-pub use events::{ChannelEventCollector, DeformableContactEvent, DeformableEventHandler};
+pub use events::{
+    ChannelEventCollector, DeformableContactEvent, DeformableEventHandler, DeformableTearEvent,
+};
 pub use integrator::{Integrator, AUTO_GLOBAL_ITERATIONS, AUTO_SUBSTEPS, GLOBAL_SUBSTEPS};
-pub use material::{FlowIn, Gas, Material, Plasticity, Stiffness};
+pub use material::{FlowIn, Gas, Material, Plasticity, Stiffness, Tearing};
 pub use mesh::{CellKind, Mesh, MeshWarning};
 pub use model::{ElementModel, RotationFit, ShapeDamping};
 pub use pipeline::{DeformablePipeline, PipelineSettings, RigidSets};

@@ -16,6 +16,9 @@ pub struct DeformableReport {
     /// Elastic energy released by plastic flow at the end of the step (the stored energy at
     /// the step's end positions before the flow, less after), J: energy the body dissipated.
     pub plastic_dissipation: Real,
+    /// Faces torn open at the end of the step ([`Deformable::last_tears`](super::Deformable::last_tears)).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub torn_faces: usize,
     /// Number of nodes.
     pub nodes: usize,
     /// Number of cells.

@@ -90,13 +90,15 @@ mod imp {
     use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
     use super::super::attach::{Attachment, Bindings};
+    use super::super::body::tear::Crack;
     use super::super::body::{
         check_state, Activation, Deformable, LastStep, Rest, State, StepBuffers, SurfaceTree,
     };
     use super::super::contact::{ContactMaterial, ContactPoint};
     use super::super::embedding::Embedding;
+    use super::super::error::BuildError;
     use super::super::integrator::{MidpointCarry, MidpointState};
-    use super::super::material::{Material, Plasticity, Resolved, Stiffness};
+    use super::super::material::{Material, Plasticity, Resolved, Stiffness, Tearing};
     use super::super::math::{Real, Rotation, Vector};
     use super::super::mesh::{CellKind, Mesh};
     use super::super::model::{gas::Chamber, Accumulator, ElementModel, ModelState};
@@ -172,6 +174,15 @@ mod imp {
         /// Plastic flow and each cell's rest vertices (absent in older snapshots: none).
         #[serde(default)]
         plastic: Option<(Plasticity, Cow<'a, [Vector]>)>,
+        /// Tearing (absent in older snapshots: none).
+        #[serde(default)]
+        tearing: Option<Tearing>,
+        /// The faces torn open in the last step (absent in older snapshots: none).
+        #[serde(default)]
+        tears: Cow<'a, [[u32; 2]]>,
+        /// The crack torn last, while its release crosses the body (absent: none).
+        #[serde(default)]
+        crack: Option<Crack>,
         /// Gas chambers (absent in older snapshots: none).
         #[serde(default)]
         gas: Cow<'a, [Chamber]>,
@@ -211,6 +222,9 @@ mod imp {
                     .plasticity()
                     .map(|p| (p, Cow::Borrowed(self.state.elements.plastic_rest()))),
                 gas: Cow::Borrowed(self.state.elements.chambers()),
+                tearing: self.tearing,
+                tears: Cow::Borrowed(&self.last.tears),
+                crack: self.last.crack,
             }
             .serialize(s)
         }
@@ -261,6 +275,13 @@ mod imp {
                 return Err(format!(
                     "gas chamber {k} does not fit the mesh or is out of range"
                 ));
+            }
+            if let Some(t) = &self.tearing {
+                let plasticity = self.plastic.as_ref().map(|(p, _)| p);
+                t.validate(plasticity).map_err(|e| e.to_string())?;
+                if !gas.is_empty() {
+                    return Err(BuildError::TearingWithGas.to_string());
+                }
             }
             elements.set_gas(gas, n);
             elements
@@ -322,12 +343,15 @@ mod imp {
                     contacts: self.contacts.into_owned(),
                     touching: self.touching.into_owned(),
                     touching_bodies: self.touching_bodies.into_owned(),
+                    tears: self.tears.into_owned(),
+                    crack: self.crack,
                 },
                 bindings,
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
                 deformation_damping: self.deformation_damping,
                 render,
+                tearing: self.tearing,
                 user_data: self.user_data,
             })
         }

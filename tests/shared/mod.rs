@@ -42,6 +42,7 @@ mod sleep;
 mod snapshot;
 mod soft;
 mod support;
+mod tear;
 mod tower;
 mod validation;
 mod vibration;

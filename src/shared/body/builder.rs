@@ -3,7 +3,7 @@
 use super::super::attach::Bindings;
 use super::super::contact::ContactMaterial;
 use super::super::error::BuildError;
-use super::super::material::{Gas, Material, Plasticity, Resolved, Stiffness};
+use super::super::material::{Gas, Material, Plasticity, Resolved, Stiffness, Tearing};
 use super::super::math::{Real, Rotation, Vector, DIM, FACET_ARITY};
 use super::super::mesh::{CellKind, Mesh};
 use super::super::model::{gas, Accumulator, ElementModel, ModelState};
@@ -31,6 +31,7 @@ pub struct DeformableBuilder {
     material: Material,
     stiffness: Stiffness,
     plasticity: Option<Plasticity>,
+    tearing: Option<Tearing>,
     /// Gas in the mesh's own chambers, then in chambers given by their facets.
     gas: Option<Gas>,
     chambers: Vec<(Vec<[u32; FACET_ARITY]>, Gas)>,
@@ -74,6 +75,7 @@ impl DeformableBuilder {
             material: Material::default(),
             stiffness: Stiffness::FromMaterial,
             plasticity: None,
+            tearing: None,
             gas: None,
             chambers: Vec::new(),
             translation: Vector::ZERO,
@@ -123,6 +125,16 @@ impl DeformableBuilder {
     /// bad parameters.
     pub fn plasticity(mut self, plasticity: Plasticity) -> Self {
         self.plasticity = Some(plasticity);
+        self
+    }
+
+    /// Tearing (default: none): the body splits along the faces between its cells stretched
+    /// across past the tear strain (`docs/ARCHITECTURE.md` §3.8), any model and cell kind.
+    /// [`DeformableBuilder::build`] refuses a bad strain or smallest piece, a tear strain at or
+    /// below the plastic yield strain ([`BuildError::TearBelowYield`]), and a body with gas
+    /// ([`BuildError::TearingWithGas`]).
+    pub fn tearing(mut self, tearing: Tearing) -> Self {
+        self.tearing = Some(tearing);
         self
     }
 
@@ -349,6 +361,12 @@ impl DeformableBuilder {
             });
         }
 
+        if let Some(t) = &self.tearing {
+            t.validate(self.plasticity.as_ref())?;
+            if self.gas.is_some() || !self.chambers.is_empty() {
+                return Err(BuildError::TearingWithGas);
+            }
+        }
         let n = mesh.nodes().len();
         let rest = Rest::new(mesh, self.model, params);
         let mut elements = ModelState::build(
@@ -411,6 +429,7 @@ impl DeformableBuilder {
             gravity_scale: self.gravity_scale,
             deformation_damping: self.deformation_damping,
             render: None,
+            tearing: self.tearing,
             user_data: self.user_data,
         })
     }

@@ -4,7 +4,7 @@ use super::attach::{self, AttachError, Attachment, Bindings};
 use super::contact::{ContactMaterial, ContactPoint};
 use super::embedding::Embedding;
 use super::error::BuildError;
-use super::material::{Gas, Material, Plasticity, Stiffness};
+use super::material::{Gas, Material, Plasticity, Stiffness, Tearing};
 use super::math::{self, AngVector, Real, Vector, DIM};
 use super::mesh::Mesh;
 use super::model::volume::Ratios;
@@ -16,6 +16,7 @@ use super::report::DeformableReport;
 mod builder;
 mod parts;
 mod surface;
+pub(crate) mod tear;
 
 pub use builder::DeformableBuilder;
 
@@ -54,6 +55,8 @@ pub struct Deformable {
     pub(crate) deformation_damping: Real,
     /// The render mesh, if one is bound ([`Deformable::set_render_mesh`]).
     pub(crate) render: Option<Embedding>,
+    /// [`DeformableBuilder::tearing`](super::DeformableBuilder::tearing).
+    pub(crate) tearing: Option<Tearing>,
     /// Free for the user.
     pub user_data: u128,
 }
@@ -235,6 +238,19 @@ impl Deformable {
         self.step.forces_valid = false;
         self.step.energy_memo.at.clear();
         Some(released)
+    }
+
+    /// The body's tearing ([`DeformableBuilder::tearing`](super::DeformableBuilder::tearing)),
+    /// if it tears.
+    pub fn tearing(&self) -> Option<Tearing> {
+        self.tearing
+    }
+
+    /// The faces that tore open in the last step, each as the two cells it joined (cell
+    /// indices are kept by a tear; the nodes it cut apart got copies, past the nodes there
+    /// were).
+    pub fn last_tears(&self) -> &[[u32; 2]] {
+        &self.last.tears
     }
 
     /// The body's plastic flow ([`DeformableBuilder::plasticity`](super::DeformableBuilder::plasticity)),

@@ -30,6 +30,8 @@ pub(crate) struct Rest {
     pub inv_masses: Vec<Real>,
     /// The facets each surface node leaves alone in self contact, made when first needed.
     near_facets: OnceLock<NearFacets>,
+    /// The interior faces, found when a tearing body first checks them.
+    pub(super) faces: OnceLock<super::tear::Faces>,
     /// How far the node bounds overestimate the body's highest frequencies, measured when
     /// first needed (a pure function of the rest mesh, model and material).
     slack: OnceLock<Slack>,
@@ -55,6 +57,7 @@ impl Rest {
             masses,
             inv_masses,
             near_facets: OnceLock::new(),
+            faces: OnceLock::new(),
             slack: OnceLock::new(),
         }
     }
@@ -206,4 +209,8 @@ pub(crate) struct LastStep {
     pub touching: Vec<ColliderHandle>,
     /// Deformables touched (a node of either on a facet of the other), sorted.
     pub touching_bodies: Vec<DeformableHandle>,
+    /// The cells each side of each face that tore open in the step.
+    pub tears: Vec<[u32; 2]>,
+    /// The crack torn last, while its release crosses the body.
+    pub crack: Option<super::tear::Crack>,
 }

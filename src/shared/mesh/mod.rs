@@ -284,15 +284,7 @@ impl Mesh {
     }
 
     fn extract_boundary(&mut self) -> Result<(), BuildError> {
-        let local_faces: Vec<Vec<usize>> = match self.kind {
-            CellKind::Simplex => (0..SIMPLEX_ARITY)
-                .map(|skip| (0..SIMPLEX_ARITY).filter(|&k| k != skip).collect())
-                .collect(),
-            CellKind::Cube => faces()
-                .into_iter()
-                .map(|f| f.into_iter().map(bits_to_vtk).collect())
-                .collect(),
-        };
+        let local_faces = local_faces(self.kind);
         // Key: sorted node ids (padded). Value: (count, cell, local face).
         let mut seen: HashMap<[u32; 4], usize> = HashMap::new();
         let mut faces_found: Vec<(u32, usize, usize)> = Vec::new();
@@ -362,6 +354,19 @@ fn max_edge_length(p: &[Vector]) -> Real {
         }
     }
     m
+}
+
+/// The faces of a cell of `kind`, each as its vertices' slots in the cell.
+pub(crate) fn local_faces(kind: CellKind) -> Vec<Vec<usize>> {
+    match kind {
+        CellKind::Simplex => (0..SIMPLEX_ARITY)
+            .map(|skip| (0..SIMPLEX_ARITY).filter(|&k| k != skip).collect())
+            .collect(),
+        CellKind::Cube => faces()
+            .into_iter()
+            .map(|f| f.into_iter().map(bits_to_vtk).collect())
+            .collect(),
+    }
 }
 
 /// Signed volume of a cell (area in 2D) from its vertices in local order.

@@ -416,13 +416,11 @@ impl ModelState {
     /// The state the model carries from one substep to the next: the shape-based element's
     /// per-cell warm-start rotations (empty for the other models, whose terms are pure
     /// functions of the node state).
-    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
     pub fn warm_start(&self) -> &[Rotation] {
         self.elements.rotations()
     }
 
     /// Restores [`ModelState::warm_start`]. `Err(expected length)` if the length is wrong.
-    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
     pub fn set_warm_start(&mut self, rotations: &[Rotation]) -> Result<(), usize> {
         self.elements.set_rotations(rotations)
     }
@@ -455,14 +453,12 @@ impl ModelState {
 
     /// Each cell's rest vertices (by slot) under plastic flow; empty if the body does not
     /// flow.
-    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
     pub fn plastic_rest(&self) -> &[Vector] {
         self.plastic.as_ref().map_or(&[], |p| p.rest())
     }
 
     /// Restores [`ModelState::plastic_rest`] and the rest data derived from it;
     /// `Err(expected length)` if it does not fit the body.
-    #[cfg_attr(not(feature = "serde"), allow(dead_code))]
     pub fn set_plastic_rest(&mut self, rest: &[Vector]) -> Result<(), usize> {
         let Some(plastic) = &mut self.plastic else {
             return if rest.is_empty() { Ok(()) } else { Err(0) };

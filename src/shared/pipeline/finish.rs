@@ -3,7 +3,7 @@
 
 use super::super::body::Deformable;
 use super::super::contact;
-use super::super::events::{DeformableContactEvent, DeformableEventHandler};
+use super::super::events::{DeformableContactEvent, DeformableEventHandler, DeformableTearEvent};
 use super::super::math::Real;
 use super::super::set::DeformableHandle;
 use super::containment::Quality;
@@ -118,4 +118,10 @@ pub(super) fn send_events(
         });
     }
     std::mem::swap(&mut body.last.touching, &mut sc.touch.now);
+    if !body.last.tears.is_empty() {
+        events.handle_tear_event(DeformableTearEvent {
+            deformable: handle,
+            faces: body.last.tears.clone(),
+        });
+    }
 }

@@ -707,7 +707,19 @@ fn check_member(
     finish::diagnose(body, sc, &m.candidates, m.stats, quality);
     // A body that ran out of substeps did not cover the step: its drift says nothing.
     let sane = quality.is_some() && !m.stats.cap_hit;
-    let ready = sleep::update(body, ctx, bodies, &sc.broad, sane);
+    let mut ready = sleep::update(body, ctx, bodies, &sc.broad, sane);
+    // 5b. tearing, of a sane state: the body is rebuilt on its torn mesh (its node count
+    // changes, so nothing of this step's node tables is read after it).
+    if sane {
+        body.tear(ctx.dt);
+    } else {
+        body.last.tears.clear();
+    }
+    body.last.report.torn_faces = body.last.tears.len();
+    if !body.last.tears.is_empty() {
+        ready = false;
+        body.activation.still_time = 0.0;
+    }
     m.times.integrate = integrate_start.elapsed().as_secs_f64();
     Some(ready)
 }

@@ -2,7 +2,8 @@
 //!
 //! [`RerunRecorder`] logs one frame of a world — its deformables, its rapier colliders and the
 //! step report — on two timelines, `step` (step index) and `sim_time` (simulated seconds).
-//! What never changes is logged once, as static data: the view's axes, the surface topology,
+//! What never changes is logged once, as static data: the view's axes, the surface topology
+//! (on the timeline, each time it changes, for a body that tears),
 //! each collider's shape (in its own frame; its pose is logged when it changes).
 //!
 //! Entity paths (stable; script against them):
@@ -709,10 +710,18 @@ impl DeformableLog {
         options: &RecorderOptions,
         (step, time): (i64, f64),
     ) -> Result<(), RecorderError> {
+        if self.cell_start.len() != body.positions().len() + 1 {
+            // A tear split the mesh: its surface and node tables are made again.
+            let fresh = DeformableLog::new(self.name.clone(), body);
+            let pending = std::mem::take(&mut self.pending);
+            *self = DeformableLog { pending, ..fresh };
+        }
         let base = format!("world/deformables/{}", self.name);
         let surface_path = format!("{base}/surface");
         if !self.topology_logged {
-            render::surface_topology(rec, &surface_path, &self.facets)?;
+            // A body that may tear logs its topology on the timeline, each time it changes.
+            let changes = body.tearing().is_some();
+            render::surface_topology(rec, &surface_path, &self.facets, changes)?;
             self.topology_logged = true;
         }
         self.refresh_quality(body, options.nodes);
