@@ -702,6 +702,15 @@ impl DeformableLog {
         Ok(())
     }
 
+    /// Makes the surface and node tables again if a tear split the body's mesh since.
+    fn follow_tears(&mut self, body: &Deformable) {
+        if self.cell_start.len() != body.positions().len() + 1 {
+            let fresh = DeformableLog::new(self.name.clone(), body);
+            let pending = std::mem::take(&mut self.pending);
+            *self = DeformableLog { pending, ..fresh };
+        }
+    }
+
     fn log(
         &mut self,
         rec: &RecordingStream,
@@ -710,12 +719,7 @@ impl DeformableLog {
         options: &RecorderOptions,
         (step, time): (i64, f64),
     ) -> Result<(), RecorderError> {
-        if self.cell_start.len() != body.positions().len() + 1 {
-            // A tear split the mesh: its surface and node tables are made again.
-            let fresh = DeformableLog::new(self.name.clone(), body);
-            let pending = std::mem::take(&mut self.pending);
-            *self = DeformableLog { pending, ..fresh };
-        }
+        self.follow_tears(body);
         let base = format!("world/deformables/{}", self.name);
         let surface_path = format!("{base}/surface");
         if !self.topology_logged {
