@@ -73,6 +73,8 @@ const KEYS: &[(&str, &str)] = &[
     ("gas_volume_ratio", "f?"),
     ("boyle_error", "f?"),
     ("recovery_error", "f?"),
+    ("torn_at_strain", "f?"),
+    ("pieces", "u?"),
     ("final_kinetic_energy", "f"),
     ("nan", "b"),
     ("exploded", "b"),
@@ -197,6 +199,26 @@ fn crush_sweeps_masses_and_measures_recovery() {
         assert!(l["loaded_volume_ratio"]
             .as_f64()
             .is_some_and(|v| v > 0.0 && v < 1.0));
+    }
+}
+
+#[test]
+fn the_tear_scene_pulls_a_slab_into_two_pieces_beside_rapiers() {
+    let lines = run(&[
+        "tear",
+        "--dim",
+        "2",
+        "--model",
+        "edge-repulsion",
+        "rapier-corotational",
+    ]);
+    assert_eq!(lines.len(), 2);
+    for l in &lines {
+        assert_eq!(l["scene"], "tear");
+        assert!(l["torn_at_strain"]
+            .as_f64()
+            .is_some_and(|s| (s - 0.1).abs() <= 0.01));
+        assert_eq!(l["pieces"], 2, "{l:?}");
     }
 }
 

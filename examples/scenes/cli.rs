@@ -50,6 +50,9 @@ pub enum Scene {
     /// A hollow rubber ball inflated by a gas (20 kPa), squeezed between two plates until its
     /// cavity holds 70 % of its volume, and let go (rapier's body: a volume target instead).
     Balloon,
+    /// A slab pulled apart by two bones until it tears (tear strain 0.1), then let fall into
+    /// its pieces (rapier's body: its `tear_strain`)
+    Tear,
     /// A sausage folded double on a table, self contact on (`--self-contact off` to compare);
     /// `--seconds` is the fold and the hold together.
     Fold,
@@ -371,16 +374,19 @@ pub fn to_json(r: &Record) -> Value {
     if let (Some(all), Value::Object(more)) = (object.as_object_mut(), contact) {
         all.extend(more);
     }
-    // The balloon's measures (one `json!` of every field would pass its recursion limit).
+    // The balloon's and the tear's measures (one `json!` of every field would pass its
+    // recursion limit).
     if let Some(all) = object.as_object_mut() {
         for (key, value) in [
             ("inflation", r.inflation),
             ("gas_volume_ratio", r.gas_volume_ratio),
             ("boyle_error", r.boyle_error),
             ("recovery_error", r.recovery_error),
+            ("torn_at_strain", r.torn_at_strain),
         ] {
             all.insert(key.to_string(), json!(value));
         }
+        all.insert("pieces".to_string(), json!(r.pieces));
     }
     object
 }
@@ -410,6 +416,7 @@ fn table_header(scene: Scene) -> String {
         }
         Scene::Fold => "  self mm",
         Scene::Balloon => "  inflated  squeezed    pV err  back err",
+        Scene::Tear => "  torn at  pieces  end m/s",
         Scene::Vibration => "   f Hz  theory Hz  ζ measured",
         Scene::Bending => "   f Hz  theory Hz   mean sag mm",
         Scene::Advise => "",
@@ -490,6 +497,12 @@ fn table_row(scene: Scene, r: &Record) -> String {
                 .map_or("—".to_string(), |e| format!("{e:.1e}")),
             r.recovery_error
                 .map_or("—".to_string(), |e| format!("{e:.1e}"))
+        ),
+        Scene::Tear => format!(
+            "  {:>7}  {:>6}  {:>7}",
+            opt(r.torn_at_strain, 4),
+            r.pieces.map_or("—".to_string(), |p| p.to_string()),
+            opt(r.final_speed, 3)
         ),
         Scene::Vibration => format!(
             "  {:>5}  {:>9}  {:>10}",
@@ -592,7 +605,7 @@ macro_rules! dimension_runner {
             use sinew::$dim::{DeformableWorld, ElementModel, Material, RotationFit};
             use sinew_scenes::record::Record;
             use sinew_scenes::$dim::{
-                dt_sweep, BallScene, BalloonScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
+                dt_sweep, BallScene, BalloonScene, TearScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
                 ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
                 PinchScene, RollScene, StackScene, StretchScene, Subject, TowerScene, VibrationScene,
                 CRUSH_MASSES,
@@ -1053,6 +1066,27 @@ macro_rules! dimension_runner {
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
+                        }
+                        Scene::Tear => {
+                            let d = TearScene::default();
+                            let c = d.cube;
+                            let scene = TearScene {
+                                cube: FallScene {
+                                    subject,
+                                    resolution: args.res.unwrap_or(c.resolution),
+                                    dt: args.dt.map_or(c.dt, |v| v as Real),
+                                    young_modulus: args.young.map_or(c.young_modulus, |v| v as Real),
+                                    poisson_ratio: args.poisson.map_or(c.poisson_ratio, |v| v as Real),
+                                    damping_ratio: args.damping.map_or(c.damping_ratio, |v| v as Real),
+                                    integrator: cube.integrator,
+                                    global_iterations: cube.global_iterations,
+                                    fixed_substeps: cube.fixed_substeps,
+                                    ..c
+                                },
+                                fall: args.seconds.map_or(d.fall, |s| s as Real),
+                                ..d
+                            };
+                            vec![scene.run().map_err(err)?]
                         }
                         Scene::Fold => {
                             let d = FoldScene::default();

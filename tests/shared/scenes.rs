@@ -81,6 +81,30 @@ fn a_cube_struck_deep_by_a_paddle_survives_with_calibrated_substeps() {
 }
 
 #[test]
+fn the_tear_scene_pulls_a_slab_apart_at_its_tear_strain() {
+    // sinew's slab and rapier's peer (its own `tear_strain`) in the same scene: each tears
+    // within 10 % of the tear strain into two pieces that come to rest.
+    use crate::scenes::{RapierModel, TearScene};
+    let d = TearScene::default();
+    for subject in [
+        ElementModel::EdgeRepulsion.into(),
+        ElementModel::SHAPE_MATCHING.into(),
+        RapierModel::Corotational.into(),
+    ] {
+        let r = TearScene {
+            cube: FallScene { subject, ..d.cube },
+            ..d
+        }
+        .run()
+        .expect("scene builds");
+        assert!(!r.failed, "failed ({:?}): {r:?}", r.failure);
+        let strain = r.torn_at_strain.unwrap();
+        assert!((strain - 0.1).abs() <= 0.01, "{strain}: {r:?}");
+        assert_eq!(r.pieces, Some(2), "{r:?}");
+    }
+}
+
+#[test]
 fn the_balloon_scene_squeezes_a_gas_filled_ball_that_springs_back() {
     // sinew's ball holds its gas; rapier's peer, a volume target on its material, runs the
     // same scene and measures its cavity the same way.

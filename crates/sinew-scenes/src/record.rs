@@ -109,6 +109,10 @@ pub struct Record {
     pub boyle_error: Option<f64>,
     /// `|V/V_inflated − 1|` of the cavity at the end (balloon).
     pub recovery_error: Option<f64>,
+    /// The pulled log strain `ln(L/L₀)` at the first tear (tear).
+    pub torn_at_strain: Option<f64>,
+    /// The pieces the body ended in (tear).
+    pub pieces: Option<usize>,
     /// Deepest a surface node went inside the body's own surface over the run
     /// (`metrics::self_interpenetration`, up to half a cell deep), m (fold, limb).
     pub max_self_penetration: Option<f64>,

@@ -22,6 +22,7 @@
 //! | [`PinchScene`] | the box slips over 5 cm, goes over 1 cm into the ground, or a cell inverts | — |
 //! | [`RollScene`] | a cell inverts (or the ball blows up) | — |
 //! | [`FoldScene`] | the surface passes into itself (over 1 % of a cell) or a cell inverts | — |
+//! | [`TearScene`] | a cell inverts (rapier's: up to its first tear), it never tears or tears over 10 % from the tear strain, it does not end in two pieces, or they still move over 0.1 m/s | — |
 //! | [`BalloonScene`] | a cell inverts, the plates never squeeze the cavity, `pV` strays over 2 % (sinew) or the cavity ends over 1 % from its inflated volume | — |
 
 pub mod advise;
@@ -42,6 +43,7 @@ mod rotation_error;
 mod sim;
 mod stretch;
 mod subject;
+mod tear;
 pub mod testing;
 mod vibration;
 
@@ -64,4 +66,5 @@ pub use rotation_error::{spurious_acceleration, RotationErrorScene};
 pub use sim::{Sim, RAPIER_SKIN};
 pub use stretch::StretchScene;
 pub use subject::{RapierModel, Subject};
+pub use tear::TearScene;
 pub use vibration::{Ring, VibrationScene};

@@ -13,7 +13,7 @@ use super::super::lib::DeformableBuilder;
 use super::super::lib::DeformableHandle;
 use super::super::lib::DeformableWorld;
 use super::super::lib::Integrator;
-use super::super::lib::{Gas, Material, Stiffness};
+use super::super::lib::{Gas, Material, Stiffness, Tearing};
 use super::subject::{mean_edge, Subject};
 use crate::record::{Record, EXPLODED_DISTANCE, EXPLODED_SPEED};
 
@@ -60,6 +60,10 @@ pub(crate) struct BodySpec {
     /// volume target on its material instead, `(p + p_a)/p_a` of its rest volume (rapier 0.36
     /// has no gas).
     pub gas: Option<Gas>,
+    /// Tearing (`DeformableBuilder::tearing`); rapier's body gets the same strain as its
+    /// material's `tear_strain` (a nominal strain, `e^s − 1`) and the smallest piece as its
+    /// `min_piece`.
+    pub tearing: Option<Tearing>,
 }
 
 impl BodySpec {
@@ -76,6 +80,7 @@ impl BodySpec {
             self_contact: false,
             deformation_damping: 0.0,
             gas: None,
+            tearing: None,
         }
     }
 }
@@ -96,6 +101,8 @@ pub struct Sim {
     rest: Vec<Vector>,
     x: Vec<Vector>,
     v: Vec<Vector>,
+    /// How the mesh was turned and moved to where the body started.
+    placement: (Rotation, Vector),
     size: Real,
     material: Material,
     fixed_substeps: Option<usize>,
@@ -161,6 +168,9 @@ pub(crate) fn insert_soft(
             if let Some(gas) = spec.gas {
                 body = body.gas(gas);
             }
+            if let Some(tearing) = spec.tearing {
+                body = body.tearing(tearing);
+            }
             let body = body.build()?;
             let h = world.insert(body);
             for (body, nodes) in &spec.pins {
@@ -186,10 +196,15 @@ pub(crate) fn insert_soft(
                 .collect();
             let edges: Vec<[u32; 2]> = mesh.vertex_pairs().iter().map(|(e, _)| *e).collect();
             let pinned: Vec<u32> = pins.to_vec();
+            let mut material = model.material(&spec.material, mean_edge(rest, &edges));
+            if let Some(t) = spec.tearing {
+                material.tear_strain = Some(t.strain.exp() - 1.0);
+                material.min_piece = Some(t.smallest_piece as u32);
+            }
             let mut builder = SoftBodyBuilder::new(rest.to_vec())
                 .cells(cells)
                 .masses(masses.to_vec())
-                .material(model.material(&spec.material, mean_edge(rest, &edges)))
+                .material(material)
                 .cell_model(model.cell_model())
                 .surface_collider(
                     ColliderBuilder::ball(0.0)
@@ -323,6 +338,7 @@ impl Sim {
             &pinned,
             fixed_substeps,
         )?;
+        let placement = (spec.rotation, spec.translation);
         let mesh = spec.mesh;
         let mut sim = Sim {
             world,
@@ -334,6 +350,7 @@ impl Sim {
             x: rest.clone(),
             v: vec![Vector::ZERO; n],
             rest,
+            placement,
             size,
             material: spec.material,
             fixed_substeps,
@@ -412,9 +429,23 @@ impl Sim {
     }
 
     fn read_back(&mut self) {
+        self.follow_tears();
         let (nan, exploded) = read_state(&self.world, self.soft, &mut self.x, &mut self.v);
         self.nan |= nan;
         self.exploded |= exploded;
+        if let Soft::Rapier(h) = self.soft {
+            // A tear renumbers rapier's particles (pieces move to new bodies): its cells are
+            // not measured past it.
+            let count = self
+                .world
+                .physics
+                .soft_bodies
+                .get(h)
+                .map(|b| b.particles().len());
+            if count != Some(self.x.len()) {
+                return;
+            }
+        }
         let (mut inverted, mut min_ratio) = (0, Real::INFINITY);
         for c in 0..self.mesh.num_cells() {
             let q = self.mesh.cell_quality(c, &self.x);
@@ -427,6 +458,35 @@ impl Sim {
         self.step_min_ratio = min_ratio;
         self.max_inverted = self.max_inverted.max(inverted);
         self.min_ratio = self.min_ratio.min(min_ratio);
+    }
+
+    /// Takes sinew's torn mesh (a tear appends copies of the nodes it cut apart).
+    fn follow_tears(&mut self) {
+        let Some(d) = self.deformable() else {
+            return;
+        };
+        let n = d.num_nodes();
+        if n == self.x.len() {
+            return;
+        }
+        let (rotation, translation) = self.placement;
+        let old = self.rest.len();
+        let mesh = d.mesh().clone();
+        self.masses = d.masses().to_vec();
+        self.rest.extend(
+            mesh.nodes()[old..]
+                .iter()
+                .map(|p| rotation * *p + translation),
+        );
+        self.mesh = mesh;
+        self.x.resize(n, Vector::ZERO);
+        self.v.resize(n, Vector::ZERO);
+    }
+
+    /// Stops moving rapier's pinned particles with their bones (after its particles were
+    /// unpinned, or renumbered by a tear).
+    pub(crate) fn stop_pins(&mut self) {
+        self.pins.clear();
     }
 
     /// sinew's body, when the subject is one of sinew's models.
