@@ -1086,7 +1086,7 @@ macro_rules! dimension_runner {
                                 fall: args.seconds.map_or(d.fall, |s| s as Real),
                                 ..d
                             };
-                            vec![scene.run().map_err(err)?]
+                            vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
                         }
                         Scene::Fold => {
                             let d = FoldScene::default();

@@ -96,6 +96,15 @@ impl TearScene {
 
     /// Runs the scene.
     pub fn run(&self) -> Result<Record, BuildError> {
+        self.run_with(|_, _| {})
+    }
+
+    /// Runs the scene, calling `observe` after every step with the world and the fraction done
+    /// (of the longest the pull may take and the fall).
+    pub fn run_with(
+        &self,
+        mut observe: impl FnMut(&DeformableWorld, f64),
+    ) -> Result<Record, BuildError> {
         let c = &self.cube;
         let mut world = DeformableWorld::new();
         world.set_dt(c.dt);
@@ -142,6 +151,8 @@ impl TearScene {
         let mut torn_at = None;
         let mut pulled = 0.0;
         let mut left_pull = steps(self.after);
+        let total = (steps(pulling) + steps(self.fall)) as f64;
+        let mut done = 0;
         for _ in 0..steps(pulling) {
             if sim.exploded() || left_pull == 0 {
                 break;
@@ -153,6 +164,8 @@ impl TearScene {
                 b.set_next_kinematic_translation(at);
             }
             sim.step();
+            done += 1;
+            observe(&sim.world, done as f64 / total);
             let tore = match sim.deformable() {
                 Some(d) => !d.last_tears().is_empty(),
                 None => pieces(&sim) > 1 || rapier_particles(&sim.world) != mesh.nodes().len(),
@@ -176,6 +189,8 @@ impl TearScene {
                 break;
             }
             sim.step();
+            done += 1;
+            observe(&sim.world, (done as f64 / total).min(1.0));
         }
         let mut r = sim.record("tear", c.resolution);
         r.torn_at_strain = torn_at.map(|s| s as f64);
