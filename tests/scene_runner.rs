@@ -75,6 +75,8 @@ const KEYS: &[(&str, &str)] = &[
     ("recovery_error", "f?"),
     ("torn_at_strain", "f?"),
     ("pieces", "u?"),
+    ("kept_bend", "f?"),
+    ("kept_bend_theory", "f?"),
     ("final_kinetic_energy", "f"),
     ("nan", "b"),
     ("exploded", "b"),

@@ -53,6 +53,9 @@ pub enum Scene {
     /// A slab pulled apart by two bones until it tears (tear strain 0.1), then let fall into
     /// its pieces (rapier's body: its `tear_strain`)
     Tear,
+    /// A plastic bar bent a quarter turn by a bone and let go: the bend it keeps against an
+    /// elastic–perfectly-plastic beam's (rapier's body: its `plastic_yield`)
+    Bend,
     /// A sausage folded double on a table, self contact on (`--self-contact off` to compare);
     /// `--seconds` is the fold and the hold together.
     Fold,
@@ -383,6 +386,8 @@ pub fn to_json(r: &Record) -> Value {
             ("boyle_error", r.boyle_error),
             ("recovery_error", r.recovery_error),
             ("torn_at_strain", r.torn_at_strain),
+            ("kept_bend", r.kept_bend),
+            ("kept_bend_theory", r.kept_bend_theory),
         ] {
             all.insert(key.to_string(), json!(value));
         }
@@ -417,6 +422,7 @@ fn table_header(scene: Scene) -> String {
         Scene::Fold => "  self mm",
         Scene::Balloon => "  inflated  squeezed    pV err  back err",
         Scene::Tear => "  torn at  pieces  end m/s",
+        Scene::Bend => "  kept rad  beam rad",
         Scene::Vibration => "   f Hz  theory Hz  ζ measured",
         Scene::Bending => "   f Hz  theory Hz   mean sag mm",
         Scene::Advise => "",
@@ -497,6 +503,11 @@ fn table_row(scene: Scene, r: &Record) -> String {
                 .map_or("—".to_string(), |e| format!("{e:.1e}")),
             r.recovery_error
                 .map_or("—".to_string(), |e| format!("{e:.1e}"))
+        ),
+        Scene::Bend => format!(
+            "  {:>8}  {:>8}",
+            opt(r.kept_bend, 4),
+            opt(r.kept_bend_theory, 4)
         ),
         Scene::Tear => format!(
             "  {:>7}  {:>6}  {:>7}",
@@ -605,7 +616,7 @@ macro_rules! dimension_runner {
             use sinew::$dim::{DeformableWorld, ElementModel, Material, RotationFit};
             use sinew_scenes::record::Record;
             use sinew_scenes::$dim::{
-                dt_sweep, BallScene, BalloonScene, TearScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
+                dt_sweep, BallScene, BalloonScene, BendScene, TearScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
                 ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
                 PinchScene, RollScene, StackScene, StretchScene, Subject, TowerScene, VibrationScene,
                 CRUSH_MASSES,
@@ -1059,6 +1070,27 @@ macro_rules! dimension_runner {
                                     } else {
                                         c.integrator
                                     },
+                                    global_iterations: cube.global_iterations,
+                                    fixed_substeps: cube.fixed_substeps,
+                                    ..c
+                                },
+                                ..d
+                            };
+                            vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
+                        }
+                        Scene::Bend => {
+                            let d = BendScene::default();
+                            let c = d.cube;
+                            let scene = BendScene {
+                                recover: args.seconds.map_or(d.recover, |s| s as Real),
+                                cube: FallScene {
+                                    subject,
+                                    resolution: args.res.unwrap_or(c.resolution),
+                                    dt: args.dt.map_or(c.dt, |v| v as Real),
+                                    young_modulus: args.young.map_or(c.young_modulus, |v| v as Real),
+                                    poisson_ratio: args.poisson.map_or(c.poisson_ratio, |v| v as Real),
+                                    damping_ratio: args.damping.map_or(c.damping_ratio, |v| v as Real),
+                                    integrator: cube.integrator,
                                     global_iterations: cube.global_iterations,
                                     fixed_substeps: cube.fixed_substeps,
                                     ..c

@@ -1,7 +1,7 @@
 //! The stability suite's scenes with the outcomes issue 5 asks of them (the limb's are in
 //! `bones.rs`).
 
-use crate::dim::ElementModel;
+use crate::dim::{ElementModel, Integrator};
 use crate::scenes::{CrushScene, FallScene, ManipulatorScene};
 
 #[test]
@@ -78,6 +78,36 @@ fn a_cube_struck_deep_by_a_paddle_survives_with_calibrated_substeps() {
         // Struck, not grazed: some cell lost over a third of its volume.
         assert!(r.min_vol_ratio < 0.65, "{model:?} barely struck: {r:?}");
     }
+}
+
+#[test]
+fn the_bend_scene_keeps_the_bend_of_a_plastic_beam() {
+    // sinew's bar keeps an elastic–perfectly-plastic beam's bend within 15 %; rapier's peer
+    // (its own plastic yield) runs the same scene without blowing up.
+    use crate::scenes::{BendScene, RapierModel};
+    let d = BendScene::default();
+    let run = |subject, integrator| {
+        BendScene {
+            cube: FallScene {
+                subject,
+                integrator,
+                ..d.cube
+            },
+            ..d
+        }
+        .run()
+        .expect("scene builds")
+    };
+    let r = run(
+        ElementModel::EdgeRepulsion.into(),
+        Integrator::Implicit { iterations: 2 },
+    );
+    assert!(!r.failed, "failed ({:?}): {r:?}", r.failure);
+    let (kept, beam) = (r.kept_bend.unwrap(), r.kept_bend_theory.unwrap());
+    assert!((kept / beam - 1.0).abs() < 0.15, "kept {kept}, beam {beam}");
+    assert!(beam > 0.9 && beam < 1.1, "{beam}");
+    let rapier = run(RapierModel::Corotational.into(), d.cube.integrator);
+    assert!(!rapier.exploded && !rapier.nan, "{rapier:?}");
 }
 
 #[test]

@@ -113,6 +113,10 @@ pub struct Record {
     pub torn_at_strain: Option<f64>,
     /// The pieces the body ended in (tear).
     pub pieces: Option<usize>,
+    /// The bend the bar kept after it was let go, rad (bend).
+    pub kept_bend: Option<f64>,
+    /// The bend an elastic–perfectly-plastic beam keeps, rad (bend).
+    pub kept_bend_theory: Option<f64>,
     /// Deepest a surface node went inside the body's own surface over the run
     /// (`metrics::self_interpenetration`, up to half a cell deep), m (fold, limb).
     pub max_self_penetration: Option<f64>,

@@ -13,7 +13,7 @@ use super::super::lib::DeformableBuilder;
 use super::super::lib::DeformableHandle;
 use super::super::lib::DeformableWorld;
 use super::super::lib::Integrator;
-use super::super::lib::{Gas, Material, Stiffness, Tearing};
+use super::super::lib::{Gas, Material, Plasticity, Stiffness, Tearing};
 use super::subject::{mean_edge, Subject};
 use crate::record::{Record, EXPLODED_DISTANCE, EXPLODED_SPEED};
 
@@ -60,6 +60,10 @@ pub(crate) struct BodySpec {
     /// volume target on its material instead, `(p + p_a)/p_a` of its rest volume (rapier 0.36
     /// has no gas).
     pub gas: Option<Gas>,
+    /// Plastic flow (`DeformableBuilder::plasticity`); rapier's body gets the yield on its
+    /// material, as its cells' deviatoric strain (`√(2/3)` of the yield, which a uniaxial
+    /// strain at the yield has) and its edges' (`e^yield − 1`), flowing at once if sinew's does.
+    pub plasticity: Option<Plasticity>,
     /// Tearing (`DeformableBuilder::tearing`); rapier's body gets the same strain as its
     /// material's `tear_strain` (a nominal strain, `e^s − 1`) and the smallest piece as its
     /// `min_piece`.
@@ -80,6 +84,7 @@ impl BodySpec {
             self_contact: false,
             deformation_damping: 0.0,
             gas: None,
+            plasticity: None,
             tearing: None,
         }
     }
@@ -171,6 +176,9 @@ pub(crate) fn insert_soft(
             if let Some(tearing) = spec.tearing {
                 body = body.tearing(tearing);
             }
+            if let Some(plasticity) = spec.plasticity {
+                body = body.plasticity(plasticity);
+            }
             let body = body.build()?;
             let h = world.insert(body);
             for (body, nodes) in &spec.pins {
@@ -200,6 +208,17 @@ pub(crate) fn insert_soft(
             if let Some(t) = spec.tearing {
                 material.tear_strain = Some(t.strain.exp() - 1.0);
                 material.min_piece = Some(t.smallest_piece as u32);
+            }
+            if let Some(p) = spec.plasticity {
+                let creep = if p.flow_rate.is_finite() {
+                    p.flow_rate
+                } else {
+                    Real::INFINITY
+                };
+                material.plastic_yield = (2.0 / 3.0 as Real).sqrt() * p.yield_strain;
+                material.plastic_creep = creep;
+                material.edge_plastic_yield = p.yield_strain.exp() - 1.0;
+                material.edge_plastic_creep = creep;
             }
             let mut builder = SoftBodyBuilder::new(rest.to_vec())
                 .cells(cells)
@@ -481,6 +500,26 @@ impl Sim {
         self.mesh = mesh;
         self.x.resize(n, Vector::ZERO);
         self.v.resize(n, Vector::ZERO);
+    }
+
+    /// Lets go of the nodes pinned to `body`: sinew's bindings to it are dropped, rapier's
+    /// particles unpinned.
+    pub(crate) fn release(&mut self, body: RigidBodyHandle) {
+        match self.soft {
+            Soft::Sinew(h) => {
+                if let Some(d) = self.world.deformables.get_mut(h) {
+                    d.detach_body(body);
+                }
+            }
+            Soft::Rapier(h) => {
+                if let Some(sb) = self.world.physics.soft_bodies.get_mut(h) {
+                    for pin in self.pins.iter().filter(|p| p.body == body) {
+                        sb.set_particle_pinned(pin.node as usize, false);
+                    }
+                }
+            }
+        }
+        self.pins.retain(|p| p.body != body);
     }
 
     /// Stops moving rapier's pinned particles with their bones (after its particles were
