@@ -74,7 +74,7 @@ impl Default for BendScene {
 impl BendScene {
     /// The bend an elastic–perfectly-plastic beam keeps, rad.
     pub fn theory(&self) -> Real {
-        let k = std::f32::consts::FRAC_PI_2 as Real / self.length;
+        let k = std::f32::consts::FRAC_PI_2 / self.length;
         let ky = 2.0 * self.yield_strain / self.thickness;
         let kept = if k > ky {
             k - 1.5 * ky * (1.0 - (ky / k).powi(2) / 3.0)
@@ -149,7 +149,7 @@ impl BendScene {
             steps(self.bend),
             steps(self.bend) + steps(self.hold) + steps(self.recover),
         );
-        let quarter = std::f32::consts::FRAC_PI_2 as Real;
+        let quarter = std::f32::consts::FRAC_PI_2;
         let mut done = 0;
         for k in 1..=bending + steps(self.hold) {
             // The end where a uniform bend by `theta` takes it, turned by `theta`.

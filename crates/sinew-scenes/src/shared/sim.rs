@@ -215,7 +215,7 @@ pub(crate) fn insert_soft(
                 } else {
                     Real::INFINITY
                 };
-                material.plastic_yield = (2.0 / 3.0 as Real).sqrt() * p.yield_strain;
+                material.plastic_yield = Real::sqrt(2.0 / 3.0) * p.yield_strain;
                 material.plastic_creep = creep;
                 material.edge_plastic_yield = p.yield_strain.exp() - 1.0;
                 material.edge_plastic_creep = creep;
