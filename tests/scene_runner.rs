@@ -77,6 +77,7 @@ const KEYS: &[(&str, &str)] = &[
     ("pieces", "u?"),
     ("kept_bend", "f?"),
     ("kept_bend_theory", "f?"),
+    ("dent", "f?"),
     ("final_kinetic_energy", "f"),
     ("nan", "b"),
     ("exploded", "b"),

@@ -56,6 +56,9 @@ pub enum Scene {
     /// A plastic bar bent a quarter turn by a bone and let go: the bend it keeps against an
     /// elastic–perfectly-plastic beam's (rapier's body: its `plastic_yield`)
     Bend,
+    /// A 20 cm steel box dropped on a soft plastic plate, then taken away: the dent it leaves
+    /// (rapier's body: its `plastic_yield`)
+    Dent,
     /// A sausage folded double on a table, self contact on (`--self-contact off` to compare);
     /// `--seconds` is the fold and the hold together.
     Fold,
@@ -388,6 +391,7 @@ pub fn to_json(r: &Record) -> Value {
             ("torn_at_strain", r.torn_at_strain),
             ("kept_bend", r.kept_bend),
             ("kept_bend_theory", r.kept_bend_theory),
+            ("dent", r.dent),
         ] {
             all.insert(key.to_string(), json!(value));
         }
@@ -423,6 +427,7 @@ fn table_header(scene: Scene) -> String {
         Scene::Balloon => "  inflated  squeezed    pV err  back err",
         Scene::Tear => "  torn at  pieces  end m/s",
         Scene::Bend => "  kept rad  beam rad",
+        Scene::Dent => "  dent mm",
         Scene::Vibration => "   f Hz  theory Hz  ζ measured",
         Scene::Bending => "   f Hz  theory Hz   mean sag mm",
         Scene::Advise => "",
@@ -504,6 +509,7 @@ fn table_row(scene: Scene, r: &Record) -> String {
             r.recovery_error
                 .map_or("—".to_string(), |e| format!("{e:.1e}"))
         ),
+        Scene::Dent => format!("  {:>7}", opt(r.dent.map(|d| d * 1e3), 2)),
         Scene::Bend => format!(
             "  {:>8}  {:>8}",
             opt(r.kept_bend, 4),
@@ -616,7 +622,7 @@ macro_rules! dimension_runner {
             use sinew::$dim::{DeformableWorld, ElementModel, Material, RotationFit};
             use sinew_scenes::record::Record;
             use sinew_scenes::$dim::{
-                dt_sweep, BallScene, BalloonScene, BendScene, TearScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
+                dt_sweep, BallScene, BalloonScene, BendScene, DentScene, TearScene, CantileverScene, CrushScene, FallScene, FoldScene, LimbScene,
                 ManipulatorScene, PileScene, RapierModel, RotationErrorScene, SqueezeScene,
                 PinchScene, RollScene, StackScene, StretchScene, Subject, TowerScene, VibrationScene,
                 CRUSH_MASSES,
@@ -1070,6 +1076,26 @@ macro_rules! dimension_runner {
                                     } else {
                                         c.integrator
                                     },
+                                    global_iterations: cube.global_iterations,
+                                    fixed_substeps: cube.fixed_substeps,
+                                    ..c
+                                },
+                                ..d
+                            };
+                            vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
+                        }
+                        Scene::Dent => {
+                            let d = DentScene::default();
+                            let c = d.cube;
+                            let scene = DentScene {
+                                cube: FallScene {
+                                    subject,
+                                    resolution: args.res.unwrap_or(c.resolution),
+                                    dt: args.dt.map_or(c.dt, |v| v as Real),
+                                    young_modulus: args.young.map_or(c.young_modulus, |v| v as Real),
+                                    poisson_ratio: args.poisson.map_or(c.poisson_ratio, |v| v as Real),
+                                    damping_ratio: args.damping.map_or(c.damping_ratio, |v| v as Real),
+                                    integrator: cube.integrator,
                                     global_iterations: cube.global_iterations,
                                     fixed_substeps: cube.fixed_substeps,
                                     ..c

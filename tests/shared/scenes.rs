@@ -81,6 +81,31 @@ fn a_cube_struck_deep_by_a_paddle_survives_with_calibrated_substeps() {
 }
 
 #[test]
+fn the_dent_scene_leaves_a_dent_where_the_steel_box_lay() {
+    // The box rests on the plate, is taken away, and the plate keeps a dent: deeper than a
+    // millimetre, shallower than the plate, with no cell inverted; rapier's peer runs too.
+    use crate::scenes::{DentScene, RapierModel};
+    let d = DentScene::default();
+    let run = |subject| {
+        DentScene {
+            cube: FallScene { subject, ..d.cube },
+            ..d
+        }
+        .run()
+        .expect("scene builds")
+    };
+    let r = run(ElementModel::EdgeRepulsion.into());
+    assert!(!r.failed, "failed ({:?}): {r:?}", r.failure);
+    let dent = r.dent.unwrap();
+    assert!(
+        dent > 1e-3 && dent < 0.5 * d.thickness as f64,
+        "dent {dent}"
+    );
+    let rapier = run(RapierModel::Corotational.into());
+    assert!(!rapier.exploded && !rapier.nan, "{rapier:?}");
+}
+
+#[test]
 fn the_bend_scene_keeps_the_bend_of_a_plastic_beam() {
     // sinew's bar keeps an elastic–perfectly-plastic beam's bend within 15 %; rapier's peer
     // (its own plastic yield) runs the same scene without blowing up.

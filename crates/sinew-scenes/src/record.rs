@@ -117,6 +117,8 @@ pub struct Record {
     pub kept_bend: Option<f64>,
     /// The bend an elastic–perfectly-plastic beam keeps, rad (bend).
     pub kept_bend_theory: Option<f64>,
+    /// How far the middle of the plate's top stays below where it was built, m (dent).
+    pub dent: Option<f64>,
     /// Deepest a surface node went inside the body's own surface over the run
     /// (`metrics::self_interpenetration`, up to half a cell deep), m (fold, limb).
     pub max_self_penetration: Option<f64>,

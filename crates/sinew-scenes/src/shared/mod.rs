@@ -22,6 +22,7 @@
 //! | [`PinchScene`] | the box slips over 5 cm, goes over 1 cm into the ground, or a cell inverts | — |
 //! | [`RollScene`] | a cell inverts (or the ball blows up) | — |
 //! | [`FoldScene`] | the surface passes into itself (over 1 % of a cell) or a cell inverts | — |
+//! | [`DentScene`] | a cell inverts, the box goes through the plate, or no dent of 1 mm stays | — |
 //! | [`BendScene`] | a cell inverts, or the bend the bar keeps is over 15 % from an elastic–perfectly-plastic beam's | — |
 //! | [`TearScene`] | a cell inverts (rapier's: up to its first tear), it never tears or tears over 10 % from the tear strain, it does not end in two pieces, or they still move over 0.1 m/s | — |
 //! | [`BalloonScene`] | a cell inverts, the plates never squeeze the cavity, `pV` strays over 2 % (sinew) or the cavity ends over 1 % from its inflated volume | — |
@@ -32,6 +33,7 @@ mod balloon;
 mod bend;
 mod cantilever;
 mod crush;
+mod dent;
 mod fall;
 mod fall_reference;
 mod flock;
@@ -57,6 +59,7 @@ pub use balloon::BalloonScene;
 pub use bend::BendScene;
 pub use cantilever::{CantileverScene, SETTLED_WOBBLE};
 pub use crush::{CrushScene, CRUSH_MASSES};
+pub use dent::DentScene;
 pub use fall::{dt_sweep, FallScene, DT_SWEEP_MS};
 pub use fall_reference::{FallReference, ReferenceRun, FALL_REFERENCE_PATH};
 pub use flock::{PileScene, SqueezeScene, StackScene, TowerScene};
