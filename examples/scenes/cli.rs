@@ -713,6 +713,27 @@ macro_rules! dimension_runner {
                 }
             }
 
+            /// A scene's own cube `own` (its resolution, step and material unless the flags set
+            /// them), run as `cube` says (the scene's own integrator unless a flag sets one).
+            fn scene_cube(args: &Args, cube: &FallScene, own: FallScene) -> FallScene {
+                FallScene {
+                    subject: cube.subject,
+                    resolution: args.res.unwrap_or(own.resolution),
+                    dt: args.dt.map_or(own.dt, |v| v as Real),
+                    young_modulus: args.young.map_or(own.young_modulus, |v| v as Real),
+                    poisson_ratio: args.poisson.map_or(own.poisson_ratio, |v| v as Real),
+                    damping_ratio: args.damping.map_or(own.damping_ratio, |v| v as Real),
+                    integrator: if args.integrator.is_some() {
+                        cube.integrator
+                    } else {
+                        own.integrator
+                    },
+                    global_iterations: cube.global_iterations,
+                    fixed_substeps: cube.fixed_substeps,
+                    ..own
+                }
+            }
+
             /// Runs `f` with an observer that drives a progress bar and the Rerun log.
             fn observed<T>(
                 args: &Args,
@@ -1062,85 +1083,33 @@ macro_rules! dimension_runner {
                         }
                         Scene::Balloon => {
                             let d = BalloonScene::default();
-                            let c = d.cube;
                             let scene = BalloonScene {
-                                cube: FallScene {
-                                    subject,
-                                    resolution: args.res.unwrap_or(c.resolution),
-                                    dt: args.dt.map_or(c.dt, |v| v as Real),
-                                    young_modulus: args.young.map_or(c.young_modulus, |v| v as Real),
-                                    poisson_ratio: args.poisson.map_or(c.poisson_ratio, |v| v as Real),
-                                    damping_ratio: args.damping.map_or(c.damping_ratio, |v| v as Real),
-                                    integrator: if args.integrator.is_some() {
-                                        cube.integrator
-                                    } else {
-                                        c.integrator
-                                    },
-                                    global_iterations: cube.global_iterations,
-                                    fixed_substeps: cube.fixed_substeps,
-                                    ..c
-                                },
+                                cube: scene_cube(args, &cube, d.cube),
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
                         }
                         Scene::Dent => {
                             let d = DentScene::default();
-                            let c = d.cube;
                             let scene = DentScene {
-                                cube: FallScene {
-                                    subject,
-                                    resolution: args.res.unwrap_or(c.resolution),
-                                    dt: args.dt.map_or(c.dt, |v| v as Real),
-                                    young_modulus: args.young.map_or(c.young_modulus, |v| v as Real),
-                                    poisson_ratio: args.poisson.map_or(c.poisson_ratio, |v| v as Real),
-                                    damping_ratio: args.damping.map_or(c.damping_ratio, |v| v as Real),
-                                    integrator: cube.integrator,
-                                    global_iterations: cube.global_iterations,
-                                    fixed_substeps: cube.fixed_substeps,
-                                    ..c
-                                },
+                                cube: scene_cube(args, &cube, d.cube),
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
                         }
                         Scene::Bend => {
                             let d = BendScene::default();
-                            let c = d.cube;
                             let scene = BendScene {
                                 recover: args.seconds.map_or(d.recover, |s| s as Real),
-                                cube: FallScene {
-                                    subject,
-                                    resolution: args.res.unwrap_or(c.resolution),
-                                    dt: args.dt.map_or(c.dt, |v| v as Real),
-                                    young_modulus: args.young.map_or(c.young_modulus, |v| v as Real),
-                                    poisson_ratio: args.poisson.map_or(c.poisson_ratio, |v| v as Real),
-                                    damping_ratio: args.damping.map_or(c.damping_ratio, |v| v as Real),
-                                    integrator: cube.integrator,
-                                    global_iterations: cube.global_iterations,
-                                    fixed_substeps: cube.fixed_substeps,
-                                    ..c
-                                },
+                                cube: scene_cube(args, &cube, d.cube),
                                 ..d
                             };
                             vec![observed(args, name, |o| scene.run_with(o)).map_err(err)?]
                         }
                         Scene::Tear => {
                             let d = TearScene::default();
-                            let c = d.cube;
                             let scene = TearScene {
-                                cube: FallScene {
-                                    subject,
-                                    resolution: args.res.unwrap_or(c.resolution),
-                                    dt: args.dt.map_or(c.dt, |v| v as Real),
-                                    young_modulus: args.young.map_or(c.young_modulus, |v| v as Real),
-                                    poisson_ratio: args.poisson.map_or(c.poisson_ratio, |v| v as Real),
-                                    damping_ratio: args.damping.map_or(c.damping_ratio, |v| v as Real),
-                                    integrator: cube.integrator,
-                                    global_iterations: cube.global_iterations,
-                                    fixed_substeps: cube.fixed_substeps,
-                                    ..c
-                                },
+                                cube: scene_cube(args, &cube, d.cube),
                                 fall: args.seconds.map_or(d.fall, |s| s as Real),
                                 ..d
                             };

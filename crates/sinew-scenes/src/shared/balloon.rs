@@ -97,11 +97,8 @@ impl BalloonScene {
         mut observe: impl FnMut(&DeformableWorld, f64),
     ) -> Result<Record, BuildError> {
         let c = &self.cube;
-        let mut world = DeformableWorld::new();
-        world.set_dt(c.dt);
+        let mut world = c.world();
         world.physics.gravity = Vector::ZERO;
-        world.pipeline.settings.integrator = c.integrator;
-        world.pipeline.settings.global_iterations = c.global_iterations;
         let mut half = Vector::splat(2.0 * self.radius);
         half[1] = 0.05;
         let mut plates = Vec::new();

@@ -109,11 +109,8 @@ impl BendScene {
         mut observe: impl FnMut(&DeformableWorld, f64),
     ) -> Result<Record, BuildError> {
         let c = &self.cube;
-        let mut world = DeformableWorld::new();
-        world.set_dt(c.dt);
+        let mut world = c.world();
         world.physics.gravity = Vector::ZERO;
-        world.pipeline.settings.integrator = c.integrator;
-        world.pipeline.settings.global_iterations = c.global_iterations;
         let mesh = self.mesh()?;
         let mut spec = BodySpec::new(
             mesh.clone(),

@@ -99,10 +99,7 @@ impl DentScene {
         mut observe: impl FnMut(&DeformableWorld, f64),
     ) -> Result<Record, BuildError> {
         let c = &self.cube;
-        let mut world = DeformableWorld::new();
-        world.set_dt(c.dt);
-        world.pipeline.settings.integrator = c.integrator;
-        world.pipeline.settings.global_iterations = c.global_iterations;
+        let mut world = c.world();
         let mut ground = Vector::splat(2.0 * self.width);
         ground[1] = 0.1;
         world.physics.insert(

@@ -99,6 +99,16 @@ pub(crate) fn cuboid(half: Vector) -> SharedShape {
 }
 
 impl FallScene {
+    /// An empty world stepped as this cube's runs are: its step, integrator and Newton
+    /// iterations (the scenes that borrow a cube's settings start from it).
+    pub(crate) fn world(&self) -> DeformableWorld {
+        let mut world = DeformableWorld::new();
+        world.set_dt(self.dt);
+        world.pipeline.settings.integrator = self.integrator;
+        world.pipeline.settings.global_iterations = self.global_iterations;
+        world
+    }
+
     /// The material of the box.
     pub fn material(&self) -> Material {
         Material {

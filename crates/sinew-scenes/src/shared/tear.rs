@@ -106,11 +106,8 @@ impl TearScene {
         mut observe: impl FnMut(&DeformableWorld, f64),
     ) -> Result<Record, BuildError> {
         let c = &self.cube;
-        let mut world = DeformableWorld::new();
-        world.set_dt(c.dt);
+        let mut world = c.world();
         world.physics.gravity = Vector::ZERO;
-        world.pipeline.settings.integrator = c.integrator;
-        world.pipeline.settings.global_iterations = c.global_iterations;
         let mut ground = Vector::splat(2.0 * self.length);
         ground[1] = 0.1;
         world.physics.insert(
