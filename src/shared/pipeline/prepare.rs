@@ -101,13 +101,30 @@ pub(super) fn prepare<'a>(
     } else {
         0.0
     };
+    // The explicit step's own forces move a node by `½ a dt²` over the step beyond its
+    // velocity's prediction: small on a body near rest, but a body thrown by its own forces
+    // (a ball inflated to 10 atm, from rest) would end the step past a collider it never saw.
+    // (The first substep uses these forces, so they cost nothing.)
+    let pushed = if ctx.settings.integrator.steps_implicitly(body) {
+        0.0
+    } else {
+        body.refresh_forces();
+        let (force, inv) = (&body.step.acc.force, &body.rest.inv_masses);
+        let fastest = force
+            .iter()
+            .zip(inv)
+            .map(|(f, w)| (*f * *w).length())
+            .fold(0.0, Real::max);
+        0.5 * fastest * dt * dt
+    };
     let node_margin = if shortest.is_finite() {
         0.25 * shortest
     } else {
         0.0
     } + 1e-3 * size
         + 1e-4
-        + turning;
+        + turning
+        + pushed;
     let extent = region.mins.abs().max(region.maxs.abs()).max_element();
     sc.broad.skin = contact::surface_skin(shortest, extent);
     let widen = node_margin + ctx.margin;
