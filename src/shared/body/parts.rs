@@ -78,6 +78,15 @@ impl Rest {
         })
     }
 
+    /// Takes `other`'s slack, if measured: a torn body's cells are its own, and measuring
+    /// again (about 60 force evaluations) at every step of a growing crack would cost more
+    /// than the steps.
+    pub fn keep_slack(&self, other: &Rest) {
+        if let Some(s) = other.slack.get() {
+            let _ = self.slack.set(*s);
+        }
+    }
+
     /// Whether [`Rest::slack`] has been measured.
     #[cfg(test)]
     pub fn calibrated(&self) -> bool {

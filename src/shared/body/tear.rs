@@ -7,16 +7,19 @@
 //! by `λ = ½ (|F_a n| + |F_b n|)`; it tears when `ln λ` passes the tear strain.
 //!
 //! **How the mesh splits.** The cells around a node (its star) stay joined through the faces
-//! around it that did not tear. A node whose star falls apart keeps its index for the part
-//! holding its first cell, and gets a copy (same rest position, position and velocity,
-//! appended after the existing nodes) for each other part, whose cells then use the copy. A
-//! torn face whose nodes all keep their stars whole (a crack that has not reached the surface
-//! or met another) opens nothing, and is tried again at the next step. Nodes keep their
+//! around it that did not tear. A node whose star the torn faces cut apart keeps its index
+//! for the part holding its first cell, and gets a copy (same rest position, position and
+//! velocity, appended after the existing nodes) for each other part, whose cells then use the
+//! copy; a star already in parts (cells meeting at the node or an edge only) stays as built.
+//! A torn face whose nodes all keep their stars whole (a crack front inside the body) opens
+//! nothing, and is tried again at the next step; a crack wholly inside a 3D body that cuts
+//! interior nodes apart opens a closed slit. Nodes keep their
 //! indices, so contacts, bindings and a user's node lists stay valid; copies of a bound node
 //! are bound with it. The lumped masses follow the cells, so each copy carries its part's
 //! mass: momentum and kinetic energy are unchanged, and since every model's energy is a sum
 //! over cells of terms of their own vertices, so is the elastic energy. A tear never creates
-//! energy; the pieces' stored stretch is then released by their motion.
+//! energy; the pieces' stored stretch is then released by their motion. The rebuilt body keeps
+//! its measured stability slack (`model/slack.rs`) and its step's carried state.
 //!
 //! **Smallest piece.** A tear that would leave a piece (cells joined through shared nodes)
 //! smaller than [`Tearing::smallest_piece`] cells is not made: its faces stay whole.
@@ -185,27 +188,32 @@ fn split(mesh: &Mesh, faces: &Faces, torn: &[bool]) -> (Vec<u32>, Vec<u32>) {
             .expect("a face's node is a vertex of its cells");
         (c + a) as u32
     };
-    // Cell slots joined around their node through the faces that hold.
-    let mut union = Union::new(ids.len());
-    for (face, _) in faces.0.iter().zip(torn).filter(|(_, t)| !**t) {
+    // Cell slots joined around their node through every face (`whole`: a star already in
+    // parts, cells meeting at a node or an edge only, stays as it is) and through the faces
+    // that hold (`held`).
+    let mut whole = Union::new(ids.len());
+    let mut held = Union::new(ids.len());
+    for (face, &t) in faces.0.iter().zip(torn) {
         for &i in face.nodes() {
-            union.join(slot_of(face.cells[0], i), slot_of(face.cells[1], i));
+            let (a, b) = (slot_of(face.cells[0], i), slot_of(face.cells[1], i));
+            whole.join(a, b);
+            if !t {
+                held.join(a, b);
+            }
         }
     }
-    // Each node's part of its star holding its first slot keeps it; each other part gets a copy.
+    // Of each part of a node's star that the torn faces cut apart, the part holding the
+    // part's first slot keeps the node; each other gets a copy.
     let n = mesh.nodes().len();
-    let mut first_root = vec![u32::MAX; n];
+    let mut keeper: HashMap<u32, u32> = HashMap::new();
     let mut copies: HashMap<u32, u32> = HashMap::new();
     let mut parents = Vec::new();
     let mut cells = ids.to_vec();
     for slot in 0..ids.len() {
         let node = ids[slot];
-        let root = union.root(slot as u32);
-        let keeper = &mut first_root[node as usize];
-        if *keeper == u32::MAX {
-            *keeper = root;
-        }
-        if root != *keeper {
+        let root = held.root(slot as u32);
+        let first = *keeper.entry(whole.root(slot as u32)).or_insert(root);
+        if root != first {
             let copy = *copies.entry(root).or_insert_with(|| {
                 parents.push(node);
                 (n + parents.len() - 1) as u32
@@ -424,6 +432,10 @@ impl Deformable {
         }
         let mut step = StepBuffers::new(Accumulator::new(n), false, Real::INFINITY, &state);
         step.midpoint = std::mem::take(&mut self.step.midpoint);
+        step.soft_memory = std::mem::take(&mut self.step.soft_memory);
+        step.auto_implicit = self.step.auto_implicit;
+        step.global_iterations = self.step.global_iterations;
+        rest.keep_slack(&self.rest);
         self.surface = SurfaceTree::build(&rest.mesh, &state.positions);
         self.rest = rest;
         self.state = state;
@@ -440,6 +452,38 @@ mod tests {
     use super::super::super::math::{Real, Vector, DIM};
     use super::super::super::model::ElementModel;
     use super::super::DeformableBuilder;
+
+    /// Cells that meet at one node only (a bow tie) are not cut apart by a split that tears
+    /// nothing: only the torn faces separate a star.
+    #[test]
+    fn a_star_already_in_parts_stays_as_built() {
+        use super::super::super::math::SIMPLEX_ARITY;
+        use super::super::super::mesh::{CellKind, Mesh};
+        use super::{split, Faces};
+        let mut nodes = vec![Vector::ZERO];
+        for sign in [1.0, -1.0] {
+            for d in 0..DIM {
+                let mut p = Vector::ZERO;
+                p[d] = sign;
+                nodes.push(p);
+            }
+        }
+        // The second cell's vertices in the first's order, mirrored through the shared node:
+        // its orientation flips in 3D (odd), not in 2D.
+        let mut second: Vec<u32> = (DIM as u32 + 1..2 * DIM as u32 + 1).collect();
+        if DIM == 3 {
+            second.swap(0, 1);
+        }
+        let mut cells: Vec<u32> = (0..SIMPLEX_ARITY as u32).collect();
+        cells.push(0);
+        cells.extend(second);
+        let mesh = Mesh::new(nodes, cells, CellKind::Simplex).unwrap();
+        let faces = Faces::of(&mesh);
+        assert!(faces.0.is_empty());
+        let (cells, parents) = split(&mesh, &faces, &[]);
+        assert!(parents.is_empty(), "copies of {parents:?}");
+        assert_eq!(cells, mesh.cell_indices());
+    }
 
     /// A tear splits the nodes without changing the body's energy or momentum, for every
     /// model: each model's energy is a sum over cells of terms of their own vertices.

@@ -830,6 +830,8 @@ fn finish_member(
     } else {
         body.last.report.substeps = 0;
         body.last.report.contacts = 0;
+        body.last.tears.clear();
+        body.last.report.torn_faces = 0;
         body.last.report.frozen = body.activation.frozen;
         sc.broad.near.clear();
         sc.touch.touched_colliders.clear();
