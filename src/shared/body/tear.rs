@@ -271,20 +271,24 @@ impl Deformable {
         let plastic = self.state.elements.plastic_rest();
         let x = &self.state.positions;
         let faces = self.rest.faces();
-        let mut gradients: HashMap<u32, Matrix> = HashMap::new();
-        let mut gradient = |cell: u32| -> Matrix {
-            *gradients.entry(cell).or_insert_with(|| {
-                let c = cell as usize;
+        // Each cell's deformation, once per check (a cell has at most 8 vertices).
+        let gradients: Vec<Matrix> = (0..mesh.num_cells())
+            .map(|c| {
                 let ids = mesh.cell(c);
-                let now: Vec<Vector> = ids.iter().map(|&i| x[i as usize]).collect();
-                if plastic.is_empty() {
-                    let rest: Vec<Vector> = ids.iter().map(|&i| mesh.nodes()[i as usize]).collect();
-                    deformation(&rest, &now)
-                } else {
-                    deformation(&plastic[c * arity..(c + 1) * arity], &now)
+                let (mut now, mut built) = ([Vector::ZERO; 8], [Vector::ZERO; 8]);
+                for (a, &i) in ids.iter().enumerate() {
+                    now[a] = x[i as usize];
+                    built[a] = mesh.nodes()[i as usize];
                 }
+                let rest = if plastic.is_empty() {
+                    &built[..arity]
+                } else {
+                    &plastic[c * arity..(c + 1) * arity]
+                };
+                deformation(rest, &now[..arity])
             })
-        };
+            .collect();
+        let gradient = |cell: u32| gradients[cell as usize];
         let limit = tearing.strain.exp();
         let stretches: Vec<Real> = faces
             .0
