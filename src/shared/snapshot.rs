@@ -148,6 +148,10 @@ mod imp {
         /// The crossing limiter's bound; `None` for none (infinite), so that formats without
         /// infinities (JSON) can hold it.
         limiter: Option<Real>,
+        /// The cap below which `limiter` is exact (`None`: exact everywhere; absent in older
+        /// snapshots).
+        #[serde(default)]
+        crossing_cap: Option<Real>,
         contact: ContactMaterial,
         gravity_scale: Real,
         frozen: bool,
@@ -201,6 +205,7 @@ mod imp {
                 acc: Cow::Borrowed(&self.step.acc),
                 forces_valid: self.step.forces_valid,
                 limiter: Some(self.step.limiter).filter(|l| l.is_finite()),
+                crossing_cap: Some(self.step.crossing_cap).filter(|c| c.is_finite()),
                 contact: self.contact,
                 gravity_scale: self.gravity_scale,
                 deformation_damping: self.deformation_damping,
@@ -323,6 +328,7 @@ mod imp {
                 self.limiter.unwrap_or(Real::INFINITY),
                 &state,
             );
+            step.crossing_cap = self.crossing_cap.unwrap_or(Real::INFINITY);
             if let Some(carry) = self.midpoint {
                 step.midpoint = MidpointState::from_carry(carry)?;
             }

@@ -341,10 +341,11 @@ impl Deformable {
         }
         let step = &mut self.step;
         step.acc.clear();
-        step.limiter = self.state.elements.accumulate(
+        step.limiter = self.state.elements.accumulate_capped(
             &self.state.positions,
             &self.state.velocities,
             &mut step.acc,
+            step.crossing_cap,
         );
         step.forces_valid = true;
     }

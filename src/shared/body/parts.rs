@@ -117,8 +117,13 @@ pub(crate) struct StepBuffers {
     pub acc: Accumulator,
     /// Whether `acc` holds the forces at the current state.
     pub forces_valid: bool,
-    /// The crossing limiter's bound at the current state.
+    /// The crossing limiter's bound at the current state: exact where it is below
+    /// `crossing_cap`, else anything at or above that.
     pub limiter: Real,
+    /// The substep (s) below which the next evaluation of the forces is to give the crossing
+    /// limiter exactly: twice the last stable substep, which the next hardly exceeds (the
+    /// substep loop evaluates again, exactly, when it does).
+    pub crossing_cap: Real,
     /// The state at the start of the step (a failed step comes back to it).
     pub saved_positions: Vec<Vector>,
     pub saved_velocities: Vec<Vector>,
@@ -154,6 +159,7 @@ impl StepBuffers {
             acc,
             forces_valid,
             limiter,
+            crossing_cap: Real::INFINITY,
             saved_positions: state.positions.clone(),
             saved_velocities: state.velocities.clone(),
             scratch_velocities: state.velocities.clone(),

@@ -255,7 +255,10 @@ pub(crate) fn record_work(body: &mut Deformable, h: Real) {
     let q = carried(body, theta * h);
     let mut acc = Accumulator::new(q.len());
     let still = vec![Vector::ZERO; q.len()];
-    body.state.elements.accumulate(&q, &still, &mut acc);
+    // The forces alone: no crossing limiter.
+    body.state
+        .elements
+        .accumulate_capped(&q, &still, &mut acc, 0.0);
     let work: Real = acc
         .force
         .iter()

@@ -140,6 +140,9 @@ pub(crate) struct EdgeRepulsion {
     pub(super) h0: Vec<Real>,
     pub(super) side: Vec<Real>,
     pub(super) k: Vec<Real>,
+    /// For the next evaluation only: the crossing times at or above a cap need not be exact,
+    /// and a bound on the nodes' speeds relative to each other ([`relative_speed`]).
+    pub(super) crossing: Option<(Real, Real)>,
 }
 
 /// Local indices of the facet opposite each vertex, in increasing order.
@@ -179,6 +182,7 @@ impl EdgeRepulsion {
             h0: Vec::new(),
             side: Vec::new(),
             k: Vec::new(),
+            crossing: None,
         };
         for (cell, ids) in mesh.cells().enumerate() {
             let rest: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| nodes[ids[a] as usize]);
@@ -306,10 +310,11 @@ impl EdgeRepulsion {
     ) -> Real {
         let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
         let mut limit = Real::INFINITY;
+        let crossing = self.crossing;
         for first in cells.clone().step_by(LANES) {
             // The last batch repeats its last cell in the lanes past the end.
             let batch: [usize; LANES] = each(|l| (first + l).min(cells.end - 1));
-            let (f, rows, batch_limit) = cell_terms(self, batch, x, v, volume);
+            let (f, rows, batch_limit) = cell_terms(self, batch, (x, v), volume, crossing);
             for l in 0..LANES.min(cells.end - first) {
                 out(first + l, &ids[first + l], &f[l], &rows[l]);
             }
@@ -343,7 +348,7 @@ impl EdgeRepulsion {
                 let live = g2.simd_gt(tiny) & counted;
                 let len = live.select(g2, Lane::ONE).sqrt();
                 let h = g[a].dot(xs[a] - xs[OPPOSITE[a][0]]) * sign / len;
-                let hc = h.max(Lane::splat(MIN_HEIGHT_RATIO) * h0);
+                let hc = h.fast_max(Lane::splat(MIN_HEIGHT_RATIO) * h0);
                 e += live.select(k * h0 * h0 * stored((hc - h0) / h0), Lane::ZERO);
             }
         }
@@ -369,6 +374,54 @@ fn stored(t: Lane) -> Lane {
     }
 }
 
+/// The crossing limiter of [`LANES`] cells `cells` (vertices `ids`, velocities `v`): for each
+/// repulsion closing on its facet, `CROSSING_FRACTION` of the time its vertex takes to reach
+/// the facet at the rate it closes (the foot moving with the facet's vertices, weights `w`).
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn crossing_times(
+    ids: &[[u32; SIMPLEX_ARITY]],
+    cells: [usize; LANES],
+    v: &[Vector],
+    (heights, normals, weights, lives): (
+        &[Lane; SIMPLEX_ARITY],
+        &[LaneVector; SIMPLEX_ARITY],
+        &[[Lane; FACET_ARITY]; SIMPLEX_ARITY],
+        &[Lane; SIMPLEX_ARITY],
+    ),
+) -> Lane {
+    let vs: [LaneVector; SIMPLEX_ARITY] =
+        each(|a| LaneVector::gather(|l| v[ids[cells[l]][a] as usize]));
+    let mut limit = Lane::splat(Real::INFINITY);
+    for a in 0..SIMPLEX_ARITY {
+        let f = OPPOSITE[a];
+        let mut foot_velocity = LaneVector::ZERO;
+        for m in 0..FACET_ARITY {
+            foot_velocity += vs[f[m]] * weights[a][m];
+        }
+        let h = heights[a];
+        let rate = normals[a].dot(vs[a] - foot_velocity);
+        let closing = h.simd_gt(Lane::ZERO) & rate.simd_lt(Lane::ZERO) & lives[a];
+        let time = Lane::splat(CROSSING_FRACTION) * h / -rate;
+        limit = closing
+            .select(time, Lane::splat(Real::INFINITY))
+            .fast_min(limit);
+    }
+    limit
+}
+
+/// A bound on how fast any node of a body moving at `v` closes on any point that moves
+/// with a weighted mean of other nodes whose weights sum to one, over that mean's weight
+/// sum: the largest speed relative to the mean velocity, with margins for rounding.
+pub(super) fn relative_speed(v: &[Vector]) -> Real {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let mean = v.iter().fold(Vector::ZERO, |s, u| s + *u) / v.len() as Real;
+    let most = v.iter().map(|u| (*u - mean).length()).fold(0.0, Real::max);
+    most * 1.01 + mean.length() * 1e-4
+}
+
 /// The repulsions of [`LANES`] cells `cells` of `er` and their `volume` terms, summed per
 /// vertex: each cell's force on each vertex and its Gershgorin stiffness row, and the crossing
 /// limiter of the cells (infinite when no vertex approaches its facet).
@@ -377,9 +430,9 @@ fn stored(t: Lane) -> Lane {
 fn cell_terms(
     er: &EdgeRepulsion,
     cells: [usize; LANES],
-    x: &[Vector],
-    v: &[Vector],
+    (x, v): (&[Vector], &[Vector]),
     volume: Option<&Volume>,
+    crossing: Option<(Real, Real)>,
 ) -> (
     [[Vector; SIMPLEX_ARITY]; LANES],
     [[Real; SIMPLEX_ARITY]; LANES],
@@ -390,8 +443,6 @@ fn cell_terms(
     let (stiffnesses, _) = er.k.as_chunks::<SIMPLEX_ARITY>();
     let xs: [LaneVector; SIMPLEX_ARITY] =
         each(|a| LaneVector::gather(|l| x[ids[cells[l]][a] as usize]));
-    let vs: [LaneVector; SIMPLEX_ARITY] =
-        each(|a| LaneVector::gather(|l| v[ids[cells[l]][a] as usize]));
     let per_vertex = |t: &[[Real; SIMPLEX_ARITY]], a: usize| Lane::new(each(|l| t[cells[l]][a]));
     let sign = Lane::new(each(|l| er.sign[cells[l]]));
     // One evaluation of the cells' volume gradients serves every repulsion and the volumetric
@@ -404,7 +455,12 @@ fn cell_terms(
     let mut force = [LaneVector::ZERO; SIMPLEX_ARITY];
     let mut stiffness = [Lane::ZERO; SIMPLEX_ARITY];
     let mut length = [Lane::ZERO; SIMPLEX_ARITY];
-    let mut limit = Lane::splat(Real::INFINITY);
+    // What the crossing limiter reads of each repulsion.
+    let mut heights = [Lane::ZERO; SIMPLEX_ARITY];
+    let mut normals = [LaneVector::ZERO; SIMPLEX_ARITY];
+    let mut weights = [[Lane::ZERO; FACET_ARITY]; SIMPLEX_ARITY];
+    let mut lives = [Lane::ZERO; SIMPLEX_ARITY];
+    let mut far = Lane::splat(1.0).simd_eq(Lane::ONE);
     let (one, tiny) = (Lane::ONE, Lane::splat(Real::MIN_POSITIVE));
     for a in 0..SIMPLEX_ARITY {
         let f = OPPOSITE[a];
@@ -419,18 +475,16 @@ fn cell_terms(
         // round alike (a fold in self contact is chaotic enough to tell reciprocals apart).
         let normal = g[a] * (sign / length[a]);
         let h = live.select(normal.dot(xs[a] - xs[f[0]]), Lane::ZERO);
-        let hc = h.max(Lane::splat(MIN_HEIGHT_RATIO) * h0);
+        let hc = h.fast_max(Lane::splat(MIN_HEIGHT_RATIO) * h0);
         let k_eff = live.select(k * (one + h0 * h0 / (hc * hc)), k + k);
         let push = live.select(k * (h0 * h0 / hc - h), Lane::ZERO);
         let push = normal.or_zero(live) * push;
         let even = Lane::splat(1.0 / FACET_ARITY as Real);
         let w: [Lane; FACET_ARITY] = each(|m| live.select(-g[a].dot(g[f[m]]) / g2, even));
         force[a] += push;
-        let mut foot_velocity = LaneVector::ZERO;
         let mut wsum = one;
         for m in 0..FACET_ARITY {
             force[f[m]] += -(push * w[m]);
-            foot_velocity += vs[f[m]] * w[m];
             wsum += w[m].abs();
         }
         // Gershgorin rows of the rank-one term k_eff a aᵀ, a = (1, −w).
@@ -438,12 +492,22 @@ fn cell_terms(
         for m in 0..FACET_ARITY {
             stiffness[f[m]] += k_eff * w[m].abs() * wsum;
         }
-        // Crossing limiter.
-        let rate = normal.dot(vs[a] - foot_velocity);
-        let closing = h.simd_gt(Lane::ZERO) & rate.simd_lt(Lane::ZERO) & live;
-        let time = Lane::splat(CROSSING_FRACTION) * h / -rate;
-        limit = limit.min(closing.select(time, Lane::splat(Real::INFINITY)));
+        (heights[a], normals[a], weights[a], lives[a]) = (h, normal, w, live);
+        // The vertex closes on its foot at most `wsum` times the speed bound: then its
+        // crossing time is at least `CROSSING_FRACTION h / (wsum · speed)`.
+        if let Some((cap, speed)) = crossing {
+            let reach = Lane::splat(CROSSING_FRACTION) * h;
+            let slow = reach.simd_ge(Lane::splat(cap) * (wsum * Lane::splat(speed)));
+            far &= slow | !(h.simd_gt(Lane::ZERO) & live);
+        } else {
+            far = Lane::ZERO;
+        }
     }
+    let limit = if far.all() {
+        Lane::splat(Real::INFINITY)
+    } else {
+        crossing_times(ids, cells, v, (&heights, &normals, &weights, &lives))
+    };
     if let Some(volume) = volume {
         let (f, k) = volume.cell_lanes(cells, d, &g, &length);
         for a in 0..SIMPLEX_ARITY {
@@ -548,6 +612,10 @@ impl super::ElementLaw for EdgeRepulsion {
 
     #[cfg(any(test, feature = "parallel"))]
     fn edge_repulsion(&self) -> Option<&EdgeRepulsion> {
+        Some(self)
+    }
+
+    fn edge_repulsion_mut(&mut self) -> Option<&mut EdgeRepulsion> {
         Some(self)
     }
 
@@ -710,5 +778,44 @@ mod tests {
             "{limit} {expected_limit}"
         );
         assert!(expected_limit.is_finite(), "the cells close");
+    }
+
+    #[test]
+    fn a_capped_pass_is_exact_below_its_cap_and_the_same_otherwise() {
+        // The squashed, sheared, moving lattice of the test above: under any cap, the forces
+        // and stiffness rows keep their bits, and the limiter is exact where it is below the
+        // cap, at or above the cap otherwise; a small cap leaves the closing cells out.
+        let mut half = Vector::splat(0.05);
+        half[0] = 0.5;
+        let mut res = [3; math::DIM];
+        res[0] = 21;
+        let body = super::super::fixtures::er_lattice(half, res);
+        let mut er = super::super::fixtures::er_of(&body).clone();
+        let volume = body.state.elements.volume.as_ref();
+        let x = super::super::squashed(&body.state.positions, 0.6, 3.0);
+        let v: Vec<Vector> = x.iter().map(|p| -*p * 2.0).collect();
+        let bits = |acc: &Accumulator| -> Vec<u32> {
+            let forces = acc.force.iter().flat_map(|f| f.to_array());
+            forces.chain(acc.stiffness.iter().copied()).map(Real::to_bits).collect()
+        };
+        let mut exact = Accumulator::new(x.len());
+        let limit = er.accumulate(&x, &v, &mut exact, volume);
+        assert!(limit.is_finite() && limit > 0.0, "the cells close: {limit}");
+        let speed = relative_speed(&v);
+        for cap in [limit * 1e-3, limit * 0.5, limit, limit * 2.0, limit * 1e3] {
+            let mut capped = Accumulator::new(x.len());
+            er.crossing = Some((cap, speed));
+            let got = er.accumulate(&x, &v, &mut capped, volume);
+            er.crossing = None;
+            assert_eq!(bits(&capped), bits(&exact), "cap {cap}");
+            if limit < cap {
+                assert_eq!(got.to_bits(), limit.to_bits(), "cap {cap}");
+            } else {
+                assert!(got >= cap, "cap {cap}: {got}");
+            }
+        }
+        let mut small = Accumulator::new(x.len());
+        er.crossing = Some((limit * 1e-3, speed));
+        assert_eq!(er.accumulate(&x, &v, &mut small, volume), Real::INFINITY);
     }
 }

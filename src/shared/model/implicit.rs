@@ -477,7 +477,14 @@ impl ModelState {
                 x0,
                 given: input.held,
             };
-            start.fix(&e.cells, SIMPLEX_ARITY, upright, x, &mut held);
+            let all_upright = threads::chunked_fold(
+                e.cells.len() / SIMPLEX_ARITY,
+                |cells| cells_upright(e, x, cells),
+                |a, b| a && b,
+            );
+            if all_upright != Some(true) {
+                start.fix(&e.cells, SIMPLEX_ARITY, upright, x, &mut held);
+            }
         }
         if let Some(sm) = terms.shape {
             if sm.arity() == SIMPLEX_ARITY {
@@ -1084,6 +1091,13 @@ impl Vertex<'_> {
         f: &mut Vector,
         block: &mut Matrix,
     ) {
+        if s.law == Law::Linear {
+            let (df, db) =
+                linear_spring_lanes_at(s, i, self.incidence.springs_of(i), x, self.x0, self.h);
+            *f += df;
+            *block += db;
+            return;
+        }
         for &k in self.incidence.springs_of(i) {
             let k = k as usize;
             let [a, b] = s.pairs[k];
@@ -1182,6 +1196,70 @@ impl Vertex<'_> {
         }
         start
     }
+}
+
+/// The linear springs `springs` of node `i` at `i`, with their implicit dashpots: `−∂G/∂x_i`
+/// and the block, as [`Vertex::add_springs`] sums them one by one ([`hessian::radial_block`]
+/// plus the dashpot's `c/h n nᵀ`), [`LANES`] springs at a time.
+#[inline(always)]
+fn linear_spring_lanes_at<P: Positions + ?Sized>(
+    s: &Springs,
+    i: usize,
+    springs: &[u32],
+    x: &P,
+    x0: &[Vector],
+    h: Real,
+) -> (Vector, Matrix) {
+    let (one, zero, tiny) = (Lane::ONE, Lane::ZERO, Lane::splat(Real::MIN_POSITIVE));
+    let lane_index = Lane::new(each(|l| l as Real));
+    let (xi, x0i) = (x.at(i), x0[i]);
+    let splat = |v: Vector| LaneVector(each(|d| Lane::splat(v[d])));
+    let (xi_lanes, moved_i) = (splat(xi), splat(xi - x0i));
+    let mut f = LaneVector::ZERO;
+    let mut outer = [[zero; DIM]; DIM];
+    let mut diagonal = zero;
+    for batch in springs.chunks(LANES) {
+        // Lanes past the end repeat the last spring and count for nothing.
+        let counted = lane_index.simd_lt(Lane::splat(batch.len() as Real));
+        let k: [usize; LANES] = each(|l| batch[l.min(batch.len() - 1)] as usize);
+        let other: [usize; LANES] = each(|l| {
+            let [a, b] = s.pairs[k[l]];
+            (if a as usize == i { b } else { a }) as usize
+        });
+        let xj = LaneVector::gather(|l| x.at(other[l]));
+        let moved_j = LaneVector::gather(|l| x.at(other[l]) - x0[other[l]]);
+        let rest = Lane::new(each(|l| s.rest[k[l]]));
+        let stiffness = Lane::new(each(|l| s.k[k[l]]));
+        let c = Lane::new(each(|l| s.c[k[l]])) / Lane::splat(h);
+        let d = xi_lanes - xj;
+        let l2 = d.length_squared();
+        let live = l2.simd_gt(tiny) & counted;
+        let l = live.select(l2, one).sqrt();
+        let n = d * (one / l);
+        let du = stiffness * (l - rest);
+        let transverse = (du / l).fast_max(zero);
+        let along = n.dot(moved_i - moved_j);
+        f += n.or_zero(live) * -(du + c * along);
+        // `n nᵀ (k − transverse + c) + transverse I`.
+        let w = live.select(stiffness - transverse + c, zero);
+        for (col, column) in outer.iter_mut().enumerate() {
+            for (row, entry) in column.iter_mut().enumerate().take(col + 1) {
+                *entry += n.0[row] * n.0[col] * w;
+            }
+        }
+        diagonal += live.select(transverse, zero);
+    }
+    let diagonal = diagonal.reduce_add();
+    let mut out = Matrix::ZERO;
+    for (col, column) in outer.iter().enumerate() {
+        for (row, entry) in column.iter().enumerate().take(col + 1) {
+            let sum = entry.reduce_add();
+            out.col_mut(col)[row] = sum;
+            out.col_mut(row)[col] = sum;
+        }
+        out.col_mut(col)[col] += diagonal;
+    }
+    (Vector::from_array(each(|d| f.0[d].reduce_add())), out)
 }
 
 /// The positions of `cell`'s vertices.
@@ -1297,7 +1375,9 @@ fn cell_lanes_at<P: Positions + ?Sized>(
             for u in 0..SIMPLEX_ARITY {
                 for w in u + 1..SIMPLEX_ARITY {
                     let off = !(is[u] | is[w]);
-                    longest = longest.max(off.select((xs[u] - xs[w]).length_squared(), zero));
+                    longest = off
+                        .select((xs[u] - xs[w]).length_squared(), zero)
+                        .fast_max(longest);
                 }
             }
         } else {
@@ -1326,7 +1406,7 @@ fn cell_lanes_at<P: Positions + ?Sized>(
             let room = d - h_min * len;
             let rate = ga_length + is[b].select(zero, h_min * longest);
             let allowed = room.simd_gt(zero).select(room / rate, zero);
-            lane_reach = lane_reach.min(live.select(allowed, zero));
+            lane_reach = live.select(allowed, zero).fast_min(lane_reach);
             // The share of the term at the vertex: 1 at it, minus its foot weight on the facet.
             let share = is[b].select(one, ga.dot(g[b]) * inv_g2);
             f += g[b].or_zero(live) * (sign * len * inv_g2 * push * share);
@@ -1358,7 +1438,7 @@ fn cell_lanes_at<P: Positions + ?Sized>(
 /// [`barrier`] in lanes.
 #[inline(always)]
 fn barrier_lanes(h: Lane, h0: Lane, k: Lane) -> (Lane, Lane) {
-    let at = h.max(Lane::splat(MIN_STEP_HEIGHT) * h0);
+    let at = h.fast_max(Lane::splat(MIN_STEP_HEIGHT) * h0);
     let q = h0 / at;
     let stiffness = k * (Lane::ONE + q * q);
     (k * (h0 * q - at) + stiffness * (at - h), stiffness)
@@ -1386,6 +1466,28 @@ fn cell_upright(er: &EdgeRepulsion, cell: usize, p: &[Vector; SIMPLEX_ARITY]) ->
             let h_min = MIN_STEP_HEIGHT * er.h0[cell * SIMPLEX_ARITY + b];
             d * d > h_min * h_min * gb.length_squared()
         })
+}
+
+/// Whether every cell of `cells` is upright at `x` ([`cell_upright`], the same arithmetic),
+/// [`LANES`] cells at a time.
+fn cells_upright(er: &EdgeRepulsion, x: &[Vector], cells: Range<usize>) -> bool {
+    let (ids, _) = er.cells.as_chunks::<SIMPLEX_ARITY>();
+    let (rest_heights, _) = er.h0.as_chunks::<SIMPLEX_ARITY>();
+    let h_min = Lane::splat(MIN_STEP_HEIGHT);
+    cells.clone().step_by(LANES).all(|first| {
+        // The last batch repeats its last cell in the lanes past the end.
+        let cell: [usize; LANES] = each(|l| (first + l).min(cells.end - 1));
+        let xs: [LaneVector; SIMPLEX_ARITY] =
+            each(|b| LaneVector::gather(|l| x[ids[cell[l]][b] as usize]));
+        let (d, g) = lanes::simplex_gradients(&xs);
+        let d = d * Lane::new(each(|l| er.sign[cell[l]]));
+        let mut ok = d.simd_gt(Lane::ZERO);
+        for (b, gb) in g.iter().enumerate() {
+            let low = h_min * Lane::new(each(|l| rest_heights[cell[l]][b]));
+            ok &= (d * d).simd_gt(low * low * gb.length_squared());
+        }
+        ok.all()
+    })
 }
 
 /// [`cell_upright`] of the cells `batch` (at most [`LANES`]), node `i` at `p` and the others

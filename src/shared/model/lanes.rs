@@ -5,7 +5,7 @@
 //! horizontal sums), so a cell's result does not depend on the lane it is evaluated in nor on
 //! the cells beside it: a run of cells cut anywhere (the threads' slabs) gives the same values.
 
-use std::ops::{Add, AddAssign, Mul, Neg, Sub};
+use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub};
 
 use super::super::math::{Real, Vector, DIM, SIMPLEX_ARITY};
 
@@ -102,6 +102,14 @@ impl Neg for LaneVector {
     #[inline(always)]
     fn neg(self) -> LaneVector {
         LaneVector(each(|d| -self.0[d]))
+    }
+}
+
+impl Div<Lane> for LaneVector {
+    type Output = LaneVector;
+    #[inline(always)]
+    fn div(self, s: Lane) -> LaneVector {
+        LaneVector(each(|d| self.0[d] / s))
     }
 }
 

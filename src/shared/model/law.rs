@@ -118,6 +118,11 @@ pub(crate) trait ElementLaw: std::fmt::Debug + Send + Sync {
         None
     }
 
+    /// The edge-repulsion terms, to set up their next evaluation.
+    fn edge_repulsion_mut(&mut self) -> Option<&mut EdgeRepulsion> {
+        None
+    }
+
     /// The springs on node pairs, for the two-pass evaluation's spring entries.
     #[cfg(feature = "parallel")]
     fn edge_springs(&self) -> Option<&Springs>;

@@ -380,6 +380,28 @@ impl ModelState {
         limit
     }
 
+    /// [`ModelState::accumulate`], its limiter exact only where it is below `cap` (s): a
+    /// limiter at or above `cap` may be returned as anything at or above it. Edge repulsion
+    /// then leaves out the crossing times of cells whose heights and the nodes' relative
+    /// speeds bound them above `cap`.
+    pub fn accumulate_capped(
+        &mut self,
+        x: &[Vector],
+        v: &[Vector],
+        acc: &mut Accumulator,
+        cap: Real,
+    ) -> Real {
+        let Some(er) = self.elements.edge_repulsion_mut() else {
+            return self.accumulate(x, v, acc);
+        };
+        er.crossing = Some((cap, edge_repulsion::relative_speed(v)));
+        let limit = self.accumulate(x, v, acc);
+        if let Some(er) = self.elements.edge_repulsion_mut() {
+            er.crossing = None;
+        }
+        limit
+    }
+
     fn accumulate_elements(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
         #[cfg(feature = "parallel")]
         if let (Some(slabs), Some(er)) = (&self.slabs, self.elements.edge_repulsion()) {

@@ -29,6 +29,7 @@
 use super::super::material::Resolved;
 use super::super::math::{Real, Vector};
 use super::super::mesh::Mesh;
+use super::lanes::{each, Lane, LaneVector, LANES};
 use super::{reduced_mass, Accumulator, NodeBounds};
 
 /// Calibration constant `s` of the material mapping `k = s E V_s / L0²`: 31/7 in 3D, 5/2 in
@@ -137,6 +138,10 @@ impl Springs {
         // Equal lengths let one bounds check per index cover every array.
         let n = x.len();
         let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
+        if !NONLINEAR {
+            self.accumulate_linear(x, v, force);
+            return;
+        }
         for (((&[i, j], &l0), &k), &c) in self.terms(0) {
             let (f, k_row) = term::<NONLINEAR>([i, j], l0, k, c, x, v);
             let (i, j) = (i as usize, j as usize);
@@ -145,6 +150,32 @@ impl Springs {
             if NONLINEAR {
                 stiffness[i] += k_row;
                 stiffness[j] += k_row;
+            }
+        }
+    }
+
+    /// The linear law's forces, added spring by spring as [`linear_force`] gives them
+    /// (the same bits), evaluated [`LANES`] springs at a time.
+    fn accumulate_linear(&self, x: &[Vector], v: &[Vector], force: &mut [Vector]) {
+        let count = self.pairs.len();
+        for first in (0..count).step_by(LANES) {
+            // The last batch repeats its last spring in the lanes past the end.
+            let s: [usize; LANES] = each(|l| (first + l).min(count - 1));
+            let ends =
+                |e: usize, p: &[Vector]| LaneVector::gather(|l| p[self.pairs[s[l]][e] as usize]);
+            let d = ends(0, x) - ends(1, x);
+            let l = d.length_squared().sqrt();
+            let dead = l.simd_le(Lane::splat(Real::MIN_POSITIVE));
+            let n = d / l;
+            let rest = Lane::new(each(|i| self.rest[s[i]]));
+            let k = Lane::new(each(|i| self.k[s[i]]));
+            let c = Lane::new(each(|i| self.c[s[i]]));
+            let along = (ends(0, v) - ends(1, v)).dot(n);
+            let f = (n * (k * (rest - l) - c * along)).or_zero(!dead).lanes();
+            for (lane, f) in f.iter().enumerate().take(count - first) {
+                let [i, j] = self.pairs[first + lane];
+                force[i as usize] += *f;
+                force[j as usize] -= *f;
             }
         }
     }
@@ -345,5 +376,52 @@ impl super::ElementLaw for Springs {
     ) -> Real {
         Springs::evaluate(self, x, v, spring_force, stiffness.as_chunks_mut::<2>().0);
         Real::INFINITY
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::math::{Vector, DIM};
+    use super::*;
+
+    #[test]
+    fn the_linear_springs_in_lanes_add_the_bits_of_one_by_one() {
+        // A squashed, sheared, moving lattice with two nodes made to coincide (a spring of
+        // zero length, which pushes nothing): every node's force, bit for bit.
+        let mut half = Vector::splat(0.05);
+        half[0] = 0.3;
+        let mut res = [3; DIM];
+        res[0] = 9;
+        let body = super::super::fixtures::er_lattice(half, res);
+        let springs = &super::super::fixtures::er_of(&body).edges;
+        let mut x = super::super::squashed(&body.state.positions, 0.7, 2.0);
+        let [a, b] = springs.pairs[5];
+        x[b as usize] = x[a as usize];
+        let v: Vec<Vector> = x.iter().map(|p| *p * -3.0 + Vector::splat(0.1)).collect();
+        let mut acc = Accumulator::new(x.len());
+        springs.accumulate(&x, &v, &mut acc);
+        let mut expected = vec![Vector::ZERO; x.len()];
+        for (k, &[i, j]) in springs.pairs.iter().enumerate() {
+            let (i, j) = (i as usize, j as usize);
+            let f = linear_force(
+                x[i],
+                x[j],
+                v[i],
+                v[j],
+                springs.rest[k],
+                springs.k[k],
+                springs.c[k],
+            );
+            expected[i] += f;
+            expected[j] -= f;
+        }
+        assert!(expected.iter().any(|f| f.length() > 0.0));
+        for (i, (got, want)) in acc.force.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                got.to_array().map(Real::to_bits),
+                want.to_array().map(Real::to_bits),
+                "node {i}"
+            );
+        }
     }
 }

@@ -224,8 +224,12 @@ impl Volume {
             inverted += (ratio.simd_le(Lane::ZERO) & counted)
                 .to_bitmask()
                 .count_ones() as usize;
-            least = least.min(counted.select(ratio, Lane::splat(Real::INFINITY)));
-            most = most.max(counted.select(ratio, Lane::splat(-Real::INFINITY)));
+            least = counted
+                .select(ratio, Lane::splat(Real::INFINITY))
+                .fast_min(least);
+            most = counted
+                .select(ratio, Lane::splat(-Real::INFINITY))
+                .fast_max(most);
         }
         let ratios = Ratios {
             inverted,

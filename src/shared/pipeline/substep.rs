@@ -589,7 +589,7 @@ fn next_substep(
         }
         // (Fixed substeps need no bound: the body's slack is not measured for them.)
         let calibrated = alone && ctx.settings.calibrates(m.body);
-        let bound = integrator.bound(m.body, calibrated);
+        let mut bound = integrator.bound(m.body, calibrated);
         let stable = if calibrated && !m.candidates.is_empty() {
             let g = ctx.gravity * m.body.gravity_scale;
             let safety = ctx.settings.safety;
@@ -600,6 +600,15 @@ fn next_substep(
         } else {
             bound.under(ctx.settings.safety, calibrated)
         };
+        // The limiter is exact below the cap it was evaluated under: enough while the
+        // substep is too (`Deformable::refresh_forces`).
+        if integrator.uses_forces(m.body) && stable > m.body.step.crossing_cap {
+            m.body.step.crossing_cap = Real::INFINITY;
+            m.body.step.forces_valid = false;
+            timed(&mut m.times.forces, || m.body.refresh_forces());
+            bound.limiter = integrator.bound(m.body, calibrated).limiter;
+        }
+        m.body.step.crossing_cap = 2.0 * stable;
         match substep_size((stable, bound.limiter), ctx, remaining, &mut m.stats) {
             Some(hi) => h = h.min(hi),
             None => out = true,
