@@ -796,7 +796,10 @@ mod tests {
         let v: Vec<Vector> = x.iter().map(|p| -*p * 2.0).collect();
         let bits = |acc: &Accumulator| -> Vec<u32> {
             let forces = acc.force.iter().flat_map(|f| f.to_array());
-            forces.chain(acc.stiffness.iter().copied()).map(Real::to_bits).collect()
+            forces
+                .chain(acc.stiffness.iter().copied())
+                .map(Real::to_bits)
+                .collect()
         };
         let mut exact = Accumulator::new(x.len());
         let limit = er.accumulate(&x, &v, &mut exact, volume);
