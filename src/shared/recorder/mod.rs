@@ -18,6 +18,7 @@
 //! | `world/deformables/<name>/attachments` | segment node → its anchor on the bone | if `attachments` |
 //! | `world/deformables/<name>/contacts/points`, `.../contacts/normals` | last step's contact points and normals | if `contacts` |
 //! | `world/colliders/<index>_<generation>` | the collider's shape (static) and pose; grey fixed, orange kinematic (bones), blue dynamic | the pose when it changes |
+//! | `world/deformables/<name>/torn` | the faces a tear opened, both sides, as red outlines (the surface's facets that meet another one at rest) | every logged frame once the body has torn |
 //! | `world/deformables/<name>/wireframe` | 3D: the surface's edges as thin dark lines | if `wireframe` |
 //! | `world/deformables/<name>/focus` | 3D: two invisible points, the corners of the surface's box grown 1.2 times about its centre: what the eye follows (the viewer keeps a followed entity at 1.5 times its bounding radius, which for the surface itself is too close to see where it touches) | if `blueprint` |
 //! | `stats/<name>/<metric>` | `Scalars` (each [`METRICS`] entry; sent 32 frames at a time, and by `flush`): `kinetic_energy`, `elastic_energy`, `gravity_energy`, `total_energy` (their sum), `inverted_elements`, `min_volume_ratio`, `max_penetration`, `contacts`, `substeps`, `ms_forces`, `ms_contacts`, `ms_integrate`, `frozen` (0/1), `log_ms` | every logged frame |
@@ -177,6 +178,8 @@ struct DeformableLog {
     /// and the body flows).
     plastic: Vec<Real>,
     facets: Vec<[u32; FACET_ARITY]>,
+    /// The torn faces, both sides (node indices; [`torn_facets`]).
+    torn: Vec<[u32; FACET_ARITY]>,
     /// Per node (CSR): incident cells.
     cell_start: Vec<u32>,
     cells: Vec<u32>,
@@ -217,10 +220,42 @@ const INVERTED: [u8; 3] = [255, 0, 255];
 const ATTACHMENT: [u8; 3] = [240, 200, 40];
 const CONTACT: [u8; 3] = [40, 200, 90];
 const WIRE: [u8; 3] = [60, 60, 70];
+const TORN: [u8; 3] = [200, 20, 20];
 const REST: [f32; 3] = [235.0, 235.0, 235.0];
 const COMPRESSED: [f32; 3] = [215.0, 30.0, 30.0];
 const PLASTIC: [f32; 3] = [230.0, 120.0, 20.0];
 const STRETCHED: [f32; 3] = [40.0, 90.0, 220.0];
+
+/// The faces a tear opened, both sides: the boundary facets of `mesh` that meet another one
+/// at rest (a split copies the crack's nodes to their rest places; a mesh built with no such
+/// seam has none).
+fn torn_facets(mesh: &super::mesh::Mesh) -> Vec<[u32; FACET_ARITY]> {
+    let rest = mesh.nodes();
+    let key = |f: &[u32; FACET_ARITY]| {
+        let mut k: [[u32; 3]; FACET_ARITY] = std::array::from_fn(|a| {
+            let p = rest[f[a] as usize].to_array();
+            std::array::from_fn(|d| if d < p.len() { p[d].to_bits() } else { 0 })
+        });
+        k.sort_unstable();
+        k
+    };
+    let facets = mesh.boundary_facets();
+    let mut at: HashMap<[[u32; 3]; FACET_ARITY], usize> = HashMap::new();
+    let mut torn = Vec::new();
+    for (i, f) in facets.iter().enumerate() {
+        if let Some(other) = at.insert(key(f), i) {
+            torn.push(facets[other]);
+            torn.push(*f);
+        }
+    }
+    torn
+}
+
+/// The edges of facet `f` (one for a 2D facet, which is an edge).
+fn facet_edges(f: &[u32; FACET_ARITY]) -> impl Iterator<Item = [u32; 2]> + '_ {
+    let n = if FACET_ARITY > 2 { FACET_ARITY } else { 1 };
+    (0..n).map(move |a| [f[a], f[(a + 1) % FACET_ARITY]])
+}
 
 fn rgb(c: [u8; 3]) -> Color {
     Color::from_rgb(c[0], c[1], c[2])
@@ -489,7 +524,8 @@ impl RerunRecorder {
         };
         format!(
             "**Colour**: {field}, **magenta** a collapsed or inverted cell. {wire}: bindings to \
-             bones. Colliders: grey fixed, orange kinematic, blue dynamic."
+             bones. Red outlines: torn faces. Colliders: grey fixed, orange kinematic, blue \
+             dynamic."
         )
     }
 
@@ -589,6 +625,7 @@ impl DeformableLog {
             quality: vec![1.0; mesh.num_cells()],
             plastic: Vec::new(),
             facets,
+            torn: torn_facets(mesh),
             cell_start: count,
             cells,
             pair_start: pcount,
@@ -702,6 +739,24 @@ impl DeformableLog {
         Ok(())
     }
 
+    /// The torn faces' outlines at `x`, once the body has torn.
+    fn log_torn(
+        &self,
+        rec: &RecordingStream,
+        base: &str,
+        x: &[Vector],
+    ) -> Result<(), RecorderError> {
+        if !self.torn.is_empty() {
+            let segments: Vec<[Vector; 2]> = self
+                .torn
+                .iter()
+                .flat_map(|f| facet_edges(f).map(|[a, b]| [x[a as usize], x[b as usize]]))
+                .collect();
+            render::segments(rec, &format!("{base}/torn"), &segments, rgb(TORN), 0.004)?;
+        }
+        Ok(())
+    }
+
     /// Makes the surface and node tables again if a tear split the body's mesh since.
     fn follow_tears(&mut self, body: &Deformable) {
         if self.cell_start.len() != body.positions().len() + 1 {
@@ -753,6 +808,7 @@ impl DeformableLog {
                 rgb(WIRE),
             )?;
         }
+        self.log_torn(rec, &base, x)?;
         if options.nodes {
             let colors: Vec<Color> = (0..x.len()).map(|i| self.color(i, body, options)).collect();
             render::points(rec, &format!("{base}/nodes"), x, &colors, 0.005)?;
@@ -926,6 +982,7 @@ fn chain_edges(facets: &[[u32; FACET_ARITY]], n: usize) -> Vec<Vec<u32>> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::math::SIMPLEX_ARITY;
     use super::*;
 
     #[test]
@@ -949,5 +1006,56 @@ mod tests {
         seen.sort_unstable();
         assert_eq!(seen, want);
         assert!(strips.len() < want.len(), "no chaining: {strips:?}");
+    }
+
+    #[test]
+    fn the_torn_surface_is_the_boundary_facets_that_meet_at_rest() {
+        // Two simplices sharing a facet: none torn; the shared facet's nodes copied for the
+        // second cell (what a split does): that facet, once per side.
+        let dim = super::super::math::DIM;
+        let mut nodes: Vec<Vector> = (0..dim)
+            .map(|d| {
+                let mut e = Vector::ZERO;
+                e[d] = 1.0;
+                e
+            })
+            .collect();
+        nodes.push(Vector::ZERO);
+        nodes.push(Vector::ONE);
+        let n = nodes.len() as u32;
+        let simplex = super::super::mesh::CellKind::Simplex;
+        // A cell of `ids` at `at`, its first two swapped if it would be inside out.
+        let cell = |mut ids: Vec<u32>, at: &[Vector]| {
+            let p: [Vector; SIMPLEX_ARITY] = std::array::from_fn(|a| at[ids[a] as usize]);
+            if super::super::math::simplex_gradients(&p).0 < 0.0 {
+                ids.swap(0, 1);
+            }
+            ids
+        };
+        let shared: Vec<u32> = (0..n - 2).collect();
+        let first = cell([vec![n - 2], shared.clone()].concat(), &nodes);
+        let whole = [
+            first.clone(),
+            cell([shared.clone(), vec![n - 1]].concat(), &nodes),
+        ]
+        .concat();
+        let mesh = super::super::mesh::Mesh::new(nodes.clone(), whole, simplex).unwrap();
+        assert!(torn_facets(&mesh).is_empty());
+        let copies: Vec<u32> = (0..shared.len() as u32).map(|k| n + k).collect();
+        let mut split_nodes = nodes.clone();
+        split_nodes.extend(shared.iter().map(|&i| nodes[i as usize]));
+        let second = cell([copies.clone(), vec![n - 1]].concat(), &split_nodes);
+        let mesh =
+            super::super::mesh::Mesh::new(split_nodes, [first, second].concat(), simplex).unwrap();
+        let mut torn: Vec<Vec<u32>> = torn_facets(&mesh)
+            .iter()
+            .map(|f| {
+                let mut f = f.to_vec();
+                f.sort_unstable();
+                f
+            })
+            .collect();
+        torn.sort();
+        assert_eq!(torn, vec![shared, copies]);
     }
 }
