@@ -5,7 +5,7 @@ use super::super::lib::mesh::{CellKind, Mesh};
 use super::super::lib::rapier::dynamics::RigidBodyBuilder;
 use super::super::lib::rapier::geometry::ColliderBuilder;
 use super::super::lib::{BuildError, DeformableWorld, FlowIn, Material, Plasticity};
-use super::fall::{cuboid, FallScene};
+use super::fall::{cuboid, ground_at, FallScene};
 use super::sim::{BodySpec, Sim};
 use super::Record;
 
@@ -100,12 +100,7 @@ impl DentScene {
     ) -> Result<Record, BuildError> {
         let c = &self.cube;
         let mut world = c.world();
-        let mut ground = Vector::splat(2.0 * self.width);
-        ground[1] = 0.1;
-        world.physics.insert(
-            RigidBodyBuilder::fixed().translation(-UP * 0.1),
-            ColliderBuilder::new(cuboid(ground)).friction(0.5),
-        );
+        ground_at(&mut world, 0.0, 0.5, 0.0);
         let top = self.thickness;
         let half_box = Vector::splat(0.5 * self.box_size);
         let (steel, _) = world.physics.insert(

@@ -84,10 +84,15 @@ impl Default for FallScene {
 
 /// A fixed ground, top at height 0, 40 m wide.
 pub(crate) fn ground(world: &mut DeformableWorld, friction: Real, restitution: Real) {
+    ground_at(world, 0.0, friction, restitution);
+}
+
+/// A fixed ground, top at height `top`, 40 m wide.
+pub(crate) fn ground_at(world: &mut DeformableWorld, top: Real, friction: Real, restitution: Real) {
     let mut half = Vector::splat(20.0);
     half[1] = 0.5;
     world.physics.insert(
-        RigidBodyBuilder::fixed().translation(-UP * 0.5),
+        RigidBodyBuilder::fixed().translation(UP * (top - 0.5)),
         ColliderBuilder::new(cuboid(half))
             .friction(friction)
             .restitution(restitution),

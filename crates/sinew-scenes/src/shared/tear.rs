@@ -3,9 +3,8 @@
 use super::super::lib::math::{Real, Vector, DIM, UP};
 use super::super::lib::mesh::{CellKind, Mesh};
 use super::super::lib::rapier::dynamics::RigidBodyBuilder;
-use super::super::lib::rapier::geometry::ColliderBuilder;
 use super::super::lib::{BuildError, DeformableWorld, Material, Tearing};
-use super::fall::{cuboid, FallScene};
+use super::fall::{ground_at, FallScene};
 use super::sim::{BodySpec, Sim};
 use super::Record;
 
@@ -108,12 +107,7 @@ impl TearScene {
         let c = &self.cube;
         let mut world = c.world();
         world.physics.gravity = Vector::ZERO;
-        let mut ground = Vector::splat(2.0 * self.length);
-        ground[1] = 0.1;
-        world.physics.insert(
-            RigidBodyBuilder::fixed().translation(UP * (GROUND - 0.1)),
-            ColliderBuilder::new(cuboid(ground)).friction(0.5),
-        );
+        ground_at(&mut world, GROUND, 0.5, 0.0);
         let mesh = self.mesh()?;
         let half = self.half_extents();
         let mut spec = BodySpec::new(
