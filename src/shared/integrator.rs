@@ -17,7 +17,7 @@ use super::model::{self, Hold, Solve, StepInput};
 mod midpoint;
 #[cfg(feature = "serde")]
 pub(crate) use midpoint::MidpointCarry;
-pub(crate) use midpoint::MidpointState;
+pub(crate) use midpoint::{MidpointState, Rebound};
 
 /// How long the next substep may be at the body's current state.
 #[derive(Copy, Clone, Debug)]

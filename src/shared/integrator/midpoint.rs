@@ -96,6 +96,44 @@ pub(crate) struct MidpointState {
     /// The body closes fast on a collider but its explicit step was found too costly for the
     /// impact: not asked again until it stops closing.
     pub too_stiff: bool,
+    /// How it came off its last impact.
+    pub rebound: Rebound,
+}
+
+/// How a body came off its last impact (`pipeline/impact.rs`): the speed its centre of mass
+/// receded at afterwards, and that over the speed it had closed at.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub(crate) struct Rebound {
+    /// The closing speed of the centre as the impact under way began (0 in none).
+    pub entry: Real,
+    /// The fastest the centre receded since that impact began.
+    pub recede: Real,
+    /// The last finished impact's receding speed (0 before any).
+    pub out: Real,
+    /// The last finished impact's receding over closing speed, in `[0, 1]` (1 before any).
+    pub ratio: Real,
+}
+
+impl Default for Rebound {
+    fn default() -> Self {
+        Rebound {
+            entry: 0.0,
+            recede: 0.0,
+            out: 0.0,
+            ratio: 1.0,
+        }
+    }
+}
+
+impl Rebound {
+    #[cfg(feature = "serde")]
+    fn is_valid(&self) -> bool {
+        [self.entry, self.recede, self.out]
+            .iter()
+            .all(|s| s.is_finite() && *s >= 0.0)
+            && (0.0..=1.0).contains(&self.ratio)
+    }
 }
 
 /// What of a body's [`MidpointState`] a snapshot keeps: all but the step under way (a
@@ -107,6 +145,9 @@ pub(crate) struct MidpointCarry {
     ledger: Option<Ledger>,
     impact: Real,
     too_stiff: bool,
+    /// Absent in snapshots older than it: no impact seen.
+    #[serde(default)]
+    rebound: Rebound,
 }
 
 impl Default for MidpointState {
@@ -117,6 +158,7 @@ impl Default for MidpointState {
             pending: None,
             impact: 0.0,
             too_stiff: false,
+            rebound: Rebound::default(),
         }
     }
 }
@@ -146,17 +188,23 @@ impl MidpointState {
             ledger: self.ledger,
             impact: self.impact,
             too_stiff: self.too_stiff,
+            rebound: self.rebound,
         }
     }
 
     /// The state a snapshot kept, checked: `θ` in `[½, 1]`, a finite ledger whose losses are at most zero,
-    /// an impact of zero to a second.
+    /// an impact of zero to a second, finite rebound speeds of at least zero and a ratio in
+    /// `[0, 1]`.
     #[cfg(feature = "serde")]
     pub fn from_carry(c: MidpointCarry) -> Result<Self, String> {
         let ledger_ok = c
             .ledger
             .is_none_or(|l| l.loss.is_finite() && l.loss <= 0.0 && l.short.is_finite());
-        if !((0.5..=1.0).contains(&c.theta) && ledger_ok && (0.0..=1.0).contains(&c.impact)) {
+        if !((0.5..=1.0).contains(&c.theta)
+            && ledger_ok
+            && (0.0..=1.0).contains(&c.impact)
+            && c.rebound.is_valid())
+        {
             return Err(format!("midpoint step state out of range: {c:?}"));
         }
         Ok(MidpointState {
@@ -165,6 +213,7 @@ impl MidpointState {
             pending: None,
             impact: c.impact,
             too_stiff: c.too_stiff,
+            rebound: c.rebound,
         })
     }
 }
