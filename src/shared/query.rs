@@ -109,7 +109,8 @@ impl DeformableSet {
         let mut best: Option<DeformableHit> = None;
         for (handle, body) in self.iter().filter(|(h, b)| filter.sees(*h, b)) {
             let limit = best.map_or(max_time_of_impact, |b| b.time_of_impact);
-            let tree = body.surface.bvh();
+            let surface = body.surface_tree();
+            let tree = surface.bvh();
             let found = tree.cast_ray(ray, limit, |k, so_far| ray_on_facet(body, k, ray, so_far));
             if let Some((k, toi)) = found {
                 let (nodes, _) = facet(body, k);
@@ -145,7 +146,8 @@ impl DeformableSet {
             end.mins += velocity * limit;
             end.maxs += velocity * limit;
             let swept = start.merged(&end).loosened(options.target_distance);
-            for k in body.surface.bvh().intersect_aabb(&swept) {
+            let surface = body.surface_tree();
+            for k in surface.bvh().intersect_aabb(&swept) {
                 let (nodes, f) = facet(body, k);
                 let opts = ShapeCastOptions {
                     max_time_of_impact: best.map_or(limit, |b| b.time_of_impact),
@@ -190,7 +192,8 @@ impl DeformableSet {
     ) {
         let bounds = shape.compute_aabb(pose);
         for (handle, body) in self.iter().filter(|(h, b)| filter.sees(*h, b)) {
-            let touching = body.surface.bvh().intersect_aabb(&bounds).find(|&k| {
+            let surface = body.surface_tree();
+            let touching = surface.bvh().intersect_aabb(&bounds).find(|&k| {
                 let (_, f) = facet(body, k);
                 parry_query::intersection_test(pose, shape, &Pose::IDENTITY, &f)
                     .is_ok_and(|i| i.intersecting)

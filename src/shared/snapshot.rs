@@ -92,7 +92,7 @@ mod imp {
     use super::super::attach::{Attachment, Bindings};
     use super::super::body::tear::Crack;
     use super::super::body::{
-        check_state, Activation, Deformable, LastStep, Rest, State, StepBuffers, SurfaceTree,
+        check_state, Activation, Deformable, LastStep, Rest, State, StepBuffers, Surface,
     };
     use super::super::contact::{ContactMaterial, ContactPoint};
     use super::super::embedding::Embedding;
@@ -334,7 +334,7 @@ mod imp {
             }
             Ok(Deformable {
                 step,
-                surface: SurfaceTree::build(&rest.mesh, &state.positions),
+                surface: Surface::build(&rest.mesh, &state.positions),
                 state,
                 rest,
                 activation: Activation {

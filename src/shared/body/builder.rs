@@ -10,7 +10,7 @@ use super::super::model::{gas, Accumulator, ElementModel, ModelState};
 use super::super::rapier::dynamics::CoefficientCombineRule;
 use super::super::rapier::geometry::InteractionGroups;
 use super::super::report::DeformableReport;
-use super::{Activation, Deformable, LastStep, Rest, State, StepBuffers, SurfaceTree};
+use super::{Activation, Deformable, LastStep, Rest, State, StepBuffers, Surface};
 
 enum Source {
     Mesh(Mesh),
@@ -411,7 +411,7 @@ impl DeformableBuilder {
         };
         Ok(Deformable {
             step: StepBuffers::new(Accumulator::new(n), false, Real::INFINITY, &state),
-            surface: SurfaceTree::build(&rest.mesh, &state.positions),
+            surface: Surface::build(&rest.mesh, &state.positions),
             state,
             rest,
             activation: Activation::awake(self.can_sleep),

@@ -31,7 +31,7 @@ pub struct ChamberState {
     pub built_volume: Real,
 }
 pub(crate) use parts::{Activation, LastStep, Rest, State, StepBuffers};
-pub(crate) use surface::SurfaceTree;
+pub(crate) use surface::{Surface, SurfaceTree};
 
 /// A deformable body.
 ///
@@ -44,9 +44,9 @@ pub struct Deformable {
     pub(crate) step: StepBuffers,
     pub(crate) activation: Activation,
     pub(crate) last: LastStep,
-    /// The surface's bounding-volume hierarchy at the current positions (refitted after each
-    /// step and each change of state; what queries search).
-    pub(crate) surface: SurfaceTree,
+    /// The surface's bounding-volume hierarchy (refitted when searched after the nodes moved;
+    /// what queries search: [`Deformable::surface_tree`]).
+    pub(crate) surface: Surface,
     /// Nodes bound to rigid bodies.
     pub(crate) bindings: Bindings,
     pub(crate) contact: ContactMaterial,
@@ -594,10 +594,15 @@ impl Deformable {
         dropped
     }
 
-    /// Brings the surface's hierarchy, and the render mesh if there is one, to the current
-    /// positions.
+    /// The surface's hierarchy at the current positions.
+    pub(crate) fn surface_tree(&self) -> std::sync::RwLockReadGuard<'_, SurfaceTree> {
+        self.surface.search(&self.rest.mesh, &self.state.positions)
+    }
+
+    /// The nodes moved: the surface's hierarchy is refitted by the next search, the render
+    /// mesh, if there is one, brought to the current positions now.
     pub(crate) fn refit_surface(&mut self) {
-        self.surface.refit(&self.rest.mesh, &self.state.positions);
+        self.surface.moved();
         if let Some(render) = &mut self.render {
             render.update(&self.state.positions);
         }

@@ -34,7 +34,7 @@ use super::super::attach::{Attachment, Bindings};
 use super::super::math::{self, Matrix, Real, Rotation, Vector};
 use super::super::mesh::{local_faces, Mesh};
 use super::super::model::{Accumulator, ModelState};
-use super::{Deformable, Rest, State, StepBuffers, SurfaceTree};
+use super::{Deformable, Rest, State, StepBuffers, Surface};
 
 /// A face between two cells, at rest.
 #[derive(Clone, Debug)]
@@ -440,7 +440,7 @@ impl Deformable {
         step.auto_implicit = self.step.auto_implicit;
         step.global_iterations = self.step.global_iterations;
         rest.keep_slack(&self.rest);
-        self.surface = SurfaceTree::build(&rest.mesh, &state.positions);
+        self.surface = Surface::build(&rest.mesh, &state.positions);
         self.rest = rest;
         self.state = state;
         self.step = step;

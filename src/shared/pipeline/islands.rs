@@ -26,6 +26,9 @@ pub(super) fn pairs(
     out: &mut Vec<(DeformableHandle, DeformableHandle)>,
 ) {
     out.clear();
+    if set.len() < 2 {
+        return;
+    }
     let bodies: Vec<(DeformableHandle, Aabb, bool)> = set
         .iter()
         .map(|(h, b)| {
@@ -40,9 +43,6 @@ pub(super) fn pairs(
             (h, swept_region(b, dt), moving)
         })
         .collect();
-    if bodies.len() < 2 {
-        return;
-    }
     let boxes: Vec<Aabb> = bodies.iter().map(|b| b.1).collect();
     tree.set(&boxes);
     let mut wake = Vec::new();
@@ -102,6 +102,9 @@ pub(super) fn rigid_links(
     out: &mut Vec<(DeformableHandle, DeformableHandle)>,
 ) {
     out.clear();
+    if set.len() < 2 {
+        return;
+    }
     let mut shared: Vec<(RigidBodyHandle, DeformableHandle)> = Vec::new();
     let (mut near, mut attached) = (Vec::<ColliderHandle>::new(), Vec::new());
     for (h, body) in set.iter() {

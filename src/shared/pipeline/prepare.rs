@@ -63,7 +63,6 @@ pub(super) fn prepare<'a>(
     let surface = body.rest.mesh.boundary_nodes();
     let facets = body.rest.mesh.boundary_facets();
     let mut region = Aabb::new_invalid();
-    let mut shortest = Real::INFINITY;
     for &i in surface {
         let i = i as usize;
         swept(
@@ -74,16 +73,22 @@ pub(super) fn prepare<'a>(
             dt,
         );
     }
+    // The shortest surface edge, by its square: the square root of the least square is the
+    // least of the square roots, bit for bit (it rounds correctly and never decreases). One
+    // running least per edge of a facet, so that the facets' comparisons do not wait on each
+    // other; `min` passes over a NaN and is exact, so any order gives the same least.
+    let mut least = [Real::INFINITY; FACET_ARITY * (FACET_ARITY - 1) / 2];
+    let x = &body.state.positions;
     for f in facets {
+        let mut k = 0;
         for a in 0..FACET_ARITY {
             for b in a + 1..FACET_ARITY {
-                shortest = shortest.min(
-                    body.state.positions[f[a] as usize]
-                        .distance(body.state.positions[f[b] as usize]),
-                );
+                least[k] = least[k].min(x[f[a] as usize].distance_squared(x[f[b] as usize]));
+                k += 1;
             }
         }
     }
+    let shortest = least.iter().fold(Real::INFINITY, |m, &d| m.min(d)).sqrt();
     // Element forces can turn a node around within the step: widen every box by a quarter
     // of the shortest surface edge, on top of the motion predicted from the velocities. The
     // implicit step turns nodes around over a whole frame: a node may end it as fast as the
