@@ -136,7 +136,9 @@ pub enum BuildError {
         expected: &'static str,
     },
     /// Plastic flow was asked of a model or cell kind that has none.
-    #[error("the {model} model has no plastic flow on {kind} cells: plasticity needs edge repulsion or shape matching on simplex cells")]
+    #[error(
+        "the {model} model has no plastic flow on {kind} cells: plastic flow needs simplex cells"
+    )]
     NoPlasticity {
         /// Model name.
         model: &'static str,

@@ -120,9 +120,8 @@ impl DeformableBuilder {
         self
     }
 
-    /// Plastic flow (default: none, a purely elastic body): edge repulsion and shape matching
-    /// on simplex cells; [`DeformableBuilder::build`] refuses it for the other models and for
-    /// bad parameters.
+    /// Plastic flow (default: none, a purely elastic body): every model, on simplex cells;
+    /// [`DeformableBuilder::build`] refuses it for other cells and for bad parameters.
     pub fn plasticity(mut self, plasticity: Plasticity) -> Self {
         self.plasticity = Some(plasticity);
         self

@@ -240,6 +240,25 @@ impl super::ElementLaw for CentroidSprings {
         Box::new(self.clone())
     }
 
+    /// Plastic flow reaches simplex cells (the only ones that flow): their edges' rest lengths
+    /// as the springs derive them, and each vertex's rest distance to its cell's centroid
+    /// from the cell's rest shape.
+    fn flows(&self) -> bool {
+        self.kind == CellKind::Simplex
+    }
+
+    fn set_rest(&mut self, cells: &[u32], rest: &[Vector], changed: &[u32]) {
+        for &cell in changed {
+            let cell = cell as usize;
+            let p = &rest[cell * SIMPLEX_ARITY..(cell + 1) * SIMPLEX_ARITY];
+            let centroid = p.iter().sum::<Vector>() / SIMPLEX_ARITY as Real;
+            for (a, pa) in p.iter().enumerate() {
+                self.rest[cell * SIMPLEX_ARITY + a] = pa.distance(centroid);
+            }
+        }
+        self.edges.flow_rest_lengths(cells, rest, changed);
+    }
+
     fn accumulate(
         &mut self,
         x: &[Vector],

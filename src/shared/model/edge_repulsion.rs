@@ -546,23 +546,13 @@ impl super::ElementLaw for EdgeRepulsion {
         true
     }
 
-    /// A flowed cell's rest heights from its rest vertices, and the rest length of each of its
-    /// edges the mean of that edge's length in the cells that share it (their rest shapes
-    /// differ once they flow); edges of no flowed cell keep theirs.
-    fn set_rest(&mut self, rest: &[Vector], changed: &[u32]) {
-        let pairs = &self.edges.pairs;
-        let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
-        // Each pair of a cell's vertices: its local indices and its spring.
-        let springs = |cell: usize| {
-            let ids = ids[cell];
-            (0..SIMPLEX_ARITY).flat_map(move |a| {
-                (a + 1..SIMPLEX_ARITY).filter_map(move |b| {
-                    let pair = [ids[a].min(ids[b]), ids[a].max(ids[b])];
-                    pairs.binary_search(&pair).ok().map(|e| (a, b, e))
-                })
-            })
-        };
-        let mut touched = vec![false; pairs.len()];
+    fn flows(&self) -> bool {
+        true
+    }
+
+    /// A flowed cell's rest heights from its rest vertices, and its edges' rest lengths as the
+    /// springs derive them ([`Springs::flow_rest_lengths`]).
+    fn set_rest(&mut self, _: &[u32], rest: &[Vector], changed: &[u32]) {
         for &cell in changed {
             let cell = cell as usize;
             let p: [Vector; SIMPLEX_ARITY] =
@@ -570,26 +560,8 @@ impl super::ElementLaw for EdgeRepulsion {
             for (a, (_, h0)) in heights(&p).into_iter().enumerate() {
                 self.h0[cell * SIMPLEX_ARITY + a] = h0;
             }
-            for (_, _, e) in springs(cell) {
-                touched[e] = true;
-            }
         }
-        let mut length = vec![0.0; pairs.len()];
-        let mut count = vec![0u32; pairs.len()];
-        for cell in 0..ids.len() {
-            for (a, b, e) in springs(cell) {
-                if touched[e] {
-                    let at = |v: usize| rest[cell * SIMPLEX_ARITY + v];
-                    length[e] += at(a).distance(at(b));
-                    count[e] += 1;
-                }
-            }
-        }
-        for (e, rest) in self.edges.rest.iter_mut().enumerate() {
-            if touched[e] && count[e] > 0 {
-                *rest = length[e] / count[e] as Real;
-            }
-        }
+        self.edges.flow_rest_lengths(&self.cells, rest, changed);
     }
 
     fn energy(&self, x: &[Vector]) -> Real {

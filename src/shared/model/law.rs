@@ -88,11 +88,17 @@ pub(crate) trait ElementLaw: std::fmt::Debug + Send + Sync {
         }
     }
 
+    /// Whether plastic flow reaches this model's rest data ([`ElementLaw::set_rest`]): a body
+    /// of a model that does not flow cannot be built with plasticity.
+    fn flows(&self) -> bool {
+        false
+    }
+
     /// Derives the rest data of the cells `changed` (in order) from every cell's rest
-    /// vertices `rest` (by slot), after plastic flow (`plastic.rs`); only models that flow
-    /// (edge repulsion, shape matching) are asked.
-    fn set_rest(&mut self, rest: &[Vector], changed: &[u32]) {
-        let _ = (rest, changed);
+    /// vertices `rest` (by slot; `cells` their node indices), after plastic flow
+    /// (`plastic.rs`); only models that [flow](ElementLaw::flows) are asked.
+    fn set_rest(&mut self, cells: &[u32], rest: &[Vector], changed: &[u32]) {
+        let _ = (cells, rest, changed);
     }
 
     /// The term families the implicit step sums for this model; `None`: the model keeps the

@@ -267,16 +267,6 @@ impl ModelState {
     ) -> Result<Self, BuildError> {
         if let Some(p) = plasticity {
             p.validate()?;
-            let flows = matches!(
-                model,
-                ElementModel::EdgeRepulsion | ElementModel::ShapeMatching { .. }
-            );
-            if !flows || mesh.kind() != CellKind::Simplex {
-                return Err(BuildError::NoPlasticity {
-                    model: model.name(),
-                    kind: mesh.kind().name(),
-                });
-            }
         }
         // Poisson's ratio: the model's own terms scaled by σ, plus a volumetric term.
         let poisson = match (params.stiffness, lattice_poisson(model, mesh.kind())) {
@@ -334,6 +324,12 @@ impl ModelState {
                 ))
             }
         };
+        if plasticity.is_some() && (!elements.flows() || mesh.kind() != CellKind::Simplex) {
+            return Err(BuildError::NoPlasticity {
+                model: model.name(),
+                kind: mesh.kind().name(),
+            });
+        }
         let mut bounds = NodeBounds::new(mesh.nodes().len());
         elements.constant_bounds(&mut bounds);
         let young = params.material.young_modulus;
@@ -497,7 +493,8 @@ impl ModelState {
         let Some(plastic) = &self.plastic else {
             return;
         };
-        self.elements.set_rest(plastic.rest(), changed);
+        self.elements
+            .set_rest(plastic.cells(), plastic.rest(), changed);
         if let Some(volume) = &mut self.volume {
             volume.set_rest(plastic.rest(), changed);
         }

@@ -15,9 +15,10 @@
 //! Each model then derives its rest data from the cells' rest shapes
 //! ([`ElementLaw::set_rest`](super::ElementLaw::set_rest)): shape matching its rest offsets,
 //! edge repulsion its rest heights and its edges' rest lengths (the mean over the cells that
-//! share an edge), the volumetric term its rest volumes. The energy the flow releases (the
-//! elastic energy at the same positions, before less after) is the step's plastic dissipation
-//! (`DeformableReport::plastic_dissipation`).
+//! share an edge), the springs models the same rest lengths (centroid springs also their
+//! vertices' rest distances to the centroid), the volumetric term its rest volumes. The energy
+//! the flow releases (the elastic energy at the same positions, before less after) is the
+//! step's plastic dissipation (`DeformableReport::plastic_dissipation`).
 
 use super::super::material::{FlowIn, Plasticity};
 use super::super::math::{self, Matrix, Real, Vector, DIM, SIMPLEX_ARITY};
@@ -50,6 +51,11 @@ impl Plastic {
             replaced: Vec::new(),
             built,
         }
+    }
+
+    /// The cells' vertex indices, by slot.
+    pub fn cells(&self) -> &[u32] {
+        &self.cells
     }
 
     /// Each cell's rest vertices now, by slot.

@@ -508,7 +508,11 @@ impl super::ElementLaw for ShapeMatching {
         ShapeMatching::set_rotations(self, rotations)
     }
 
-    fn set_rest(&mut self, rest: &[Vector], changed: &[u32]) {
+    fn flows(&self) -> bool {
+        true
+    }
+
+    fn set_rest(&mut self, _: &[u32], rest: &[Vector], changed: &[u32]) {
         let n = self.arity;
         for &cell in changed {
             let cell = cell as usize;

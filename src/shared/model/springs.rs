@@ -27,7 +27,7 @@
 //! [`NonlinearSprings`]: super::ElementModel::NonlinearSprings
 
 use super::super::material::Resolved;
-use super::super::math::{Real, Vector};
+use super::super::math::{Real, Vector, SIMPLEX_ARITY};
 use super::super::mesh::Mesh;
 use super::lanes::{each, Lane, LaneVector, LANES};
 use super::{reduced_mass, Accumulator, NodeBounds};
@@ -79,6 +79,47 @@ pub(crate) struct Springs {
 }
 
 impl Springs {
+    /// After plastic flow (`plastic.rs`): each spring on an edge of a cell in `changed` takes
+    /// as its rest length the mean of that edge's length over the rest shapes `rest` (by slot;
+    /// `cells` their node indices) of the cells that share it, which differ once they flow;
+    /// the other springs keep theirs. Stiffness and damping stay as built.
+    pub fn flow_rest_lengths(&mut self, cells: &[u32], rest: &[Vector], changed: &[u32]) {
+        let pairs = &self.pairs;
+        let (ids, _) = cells.as_chunks::<SIMPLEX_ARITY>();
+        // Each pair of a cell's vertices: its local indices and its spring.
+        let springs = |cell: usize| {
+            let ids = ids[cell];
+            (0..SIMPLEX_ARITY).flat_map(move |a| {
+                (a + 1..SIMPLEX_ARITY).filter_map(move |b| {
+                    let pair = [ids[a].min(ids[b]), ids[a].max(ids[b])];
+                    pairs.binary_search(&pair).ok().map(|e| (a, b, e))
+                })
+            })
+        };
+        let mut touched = vec![false; pairs.len()];
+        for &cell in changed {
+            for (_, _, e) in springs(cell as usize) {
+                touched[e] = true;
+            }
+        }
+        let mut length = vec![0.0; pairs.len()];
+        let mut count = vec![0u32; pairs.len()];
+        for cell in 0..ids.len() {
+            for (a, b, e) in springs(cell) {
+                if touched[e] {
+                    let at = |v: usize| rest[cell * SIMPLEX_ARITY + v];
+                    length[e] += at(a).distance(at(b));
+                    count[e] += 1;
+                }
+            }
+        }
+        for (e, rest) in self.rest.iter_mut().enumerate() {
+            if touched[e] && count[e] > 0 {
+                *rest = length[e] / count[e] as Real;
+            }
+        }
+    }
+
     pub fn build(mesh: &Mesh, masses: &[Real], params: &Resolved, scale: Real, law: Law) -> Self {
         let pairs = mesh.vertex_pairs();
         let nodes = mesh.nodes();
@@ -314,6 +355,14 @@ fn term<const NONLINEAR: bool>(
 impl super::ElementLaw for Springs {
     fn boxed_clone(&self) -> Box<dyn super::ElementLaw> {
         Box::new(self.clone())
+    }
+
+    fn flows(&self) -> bool {
+        true
+    }
+
+    fn set_rest(&mut self, cells: &[u32], rest: &[Vector], changed: &[u32]) {
+        self.flow_rest_lengths(cells, rest, changed);
     }
 
     fn accumulate(
