@@ -188,6 +188,69 @@ fall_to_rrd!(
     "LineStrips2D:strips"
 );
 
+/// A body with gas: each chamber's gauge pressure and volume are `stats/` series holding the
+/// values `Deformable::chambers` gave at each logged step (the cube's pressure changes as it
+/// lands), and the layout shows them.
+#[test]
+fn a_gas_body_logs_its_chambers_pressure_and_volume() {
+    use sinew::dim3::math::Vector;
+    use sinew::dim3::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
+    use sinew::dim3::{DeformableBuilder, DeformableWorld, Gas, RecorderOptions, RerunRecorder};
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rerun");
+    let rrd = dir.join("gas.rrd");
+    let _ = std::fs::remove_file(&rrd);
+    let mut world = DeformableWorld::new();
+    world.set_dt(1.0 / 60.0);
+    world.physics.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, -0.1, 0.0)),
+        ColliderBuilder::cuboid(2.0, 0.1, 2.0),
+    );
+    let body = DeformableBuilder::cuboid(Vector::splat(0.1), [4, 4, 4])
+        .translation(Vector::new(0.0, 0.15, 0.0))
+        .gas(Gas::gauge(2e4))
+        .build()
+        .unwrap();
+    let h = world.insert(body);
+    let mut recorder = RerunRecorder::save("sinew-test", &rrd, RecorderOptions::default()).unwrap();
+    recorder.set_name(h, "ball");
+    let (mut pressure, mut volume) = (Vec::new(), Vec::new());
+    for _ in 0..40 {
+        world.step();
+        recorder.log_world(&world).unwrap();
+        let step = world.steps();
+        let chambers = world.deformables[h].chambers();
+        assert_eq!(chambers.len(), 1);
+        pressure.push(format!("[{step},{:e}]", chambers[0].pressure));
+        volume.push(format!("[{step},{:e}]", chambers[0].volume));
+    }
+    recorder.flush().unwrap();
+    drop(recorder);
+    let expected = dir.join("gas-series.json");
+    std::fs::write(
+        &expected,
+        format!(
+            "{{\"series\":{{\"/stats/ball/gas_pressure/0\":[{}],\"/stats/ball/gas_volume/0\":[{}]}}}}",
+            pressure.join(","),
+            volume.join(",")
+        ),
+    )
+    .unwrap();
+    run_check("tests/rerun/check_series.py", "gas", &rrd, &expected);
+    let lo = [-0.1, 0.05, -0.1];
+    let hi = [0.1, 0.25, 0.1];
+    let layout = dir.join("gas-layout.json");
+    std::fs::write(
+        &layout,
+        format!(
+            "{{\"class\":\"3D\",\"bodies\":[\"ball\"],\"box\":[{},{}],\"ground\":4}}",
+            json_vec(&lo),
+            json_vec(&hi)
+        ),
+    )
+    .unwrap();
+    run_check("tests/rerun/check_blueprint.py", "gas", &rrd, &layout);
+}
+
 /// A body that blows up is frozen, and the log says so: a warning text entry at
 /// `events/<name>` naming the cause, and the `frozen` series.
 #[test]

@@ -135,9 +135,30 @@ fn group(name: &str, plots: &[Plot], bodies: &[String]) -> Node {
     container(ContainerKind::Tabs, Some(name), &[], views)
 }
 
-/// The layout for these deformables (their entity names), with a world view of `class` ("3D"
-/// or "2D") framed by `framing`.
-fn layout(class: &'static str, bodies: &[String], framing: Framing) -> Node {
+/// The gas plots of the bodies `gas` (those with chambers): each chamber's gauge pressure and
+/// its volume, one plot each, a series per chamber and body.
+fn gas_group(gas: &[String]) -> Node {
+    let plot = |title: &str, quantity: &str| {
+        let contents = gas
+            .iter()
+            .map(|b| format!("+ /stats/{b}/{quantity}/**"))
+            .collect();
+        view("TimeSeries", title, "/stats", contents)
+    };
+    container(
+        ContainerKind::Tabs,
+        Some("gas"),
+        &[],
+        vec![
+            plot("gas pressure (Pa)", "gas_pressure"),
+            plot("gas volume", "gas_volume"),
+        ],
+    )
+}
+
+/// The layout for these deformables (their entity names; `gas` those with gas chambers), with
+/// a world view of `class` ("3D" or "2D") framed by `framing`.
+fn layout(class: &'static str, (bodies, gas): (&[String], &[String]), framing: Framing) -> Node {
     let world = Node::View {
         class,
         name: "world".to_string(),
@@ -157,10 +178,13 @@ fn layout(class: &'static str, bodies: &[String], framing: Framing) -> Node {
         &[6.0, 1.0],
         vec![world, legend],
     );
-    let groups: Vec<Node> = PLOTS
+    let mut groups: Vec<Node> = PLOTS
         .iter()
         .map(|(name, plots)| group(name, plots, bodies))
         .collect();
+    if !gas.is_empty() {
+        groups.push(gas_group(gas));
+    }
     let shares = vec![1.0; groups.len()];
     let right = container(ContainerKind::Vertical, None, &shares, groups);
     container(
@@ -262,12 +286,13 @@ fn log_node(
     }
 }
 
-/// Sends sinew's layout for these deformables (their entity names) to `target`, active and the
-/// application's default. `class` is the world view's class ("3D" or "2D").
+/// Sends sinew's layout for these deformables (their entity names; `gas` those with gas
+/// chambers) to `target`, active and the application's default. `class` is the world view's
+/// class ("3D" or "2D").
 pub fn send(
     target: &RecordingStream,
     class: &'static str,
-    bodies: &[String],
+    (bodies, gas): (&[String], &[String]),
     framing: Framing,
 ) -> RecordingStreamResult<()> {
     let application = target
@@ -280,7 +305,7 @@ pub fn send(
         .memory()?;
     rec.set_time_sequence("blueprint", 0);
     let mut ids = Ids(0);
-    let (root, _) = log_node(&rec, &layout(class, bodies, framing), &mut ids)?;
+    let (root, _) = log_node(&rec, &layout(class, (bodies, gas), framing), &mut ids)?;
     rec.log(
         "viewport",
         &ViewportBlueprint::new()

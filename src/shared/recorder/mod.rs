@@ -22,6 +22,7 @@
 //! | `world/deformables/<name>/wireframe` | 3D: the surface's edges as thin dark lines | if `wireframe` |
 //! | `world/deformables/<name>/focus` | 3D: two invisible points, the corners of the surface's box grown 1.2 times about its centre: what the eye follows (the viewer keeps a followed entity at 1.5 times its bounding radius, which for the surface itself is too close to see where it touches) | if `blueprint` |
 //! | `stats/<name>/<metric>` | `Scalars` (each [`METRICS`] entry; sent 32 frames at a time, and by `flush`): `kinetic_energy`, `elastic_energy`, `gravity_energy`, `total_energy` (their sum), `inverted_elements`, `min_volume_ratio`, `max_penetration`, `contacts`, `substeps`, `ms_forces`, `ms_contacts`, `ms_integrate`, `frozen` (0/1), `log_ms` | every logged frame |
+//! | `stats/<name>/gas_pressure/<k>`, `stats/<name>/gas_volume/<k>` | `Scalars`: gas chamber `k`'s gauge pressure (Pa) and its volume (m³; area in 2D), as [`Deformable::chambers`] gives them; sent with the metrics | every logged frame, for a body with gas |
 //! | `events/<name>` | `TextLog`: a warning when the body is frozen (why: non-finite state or a blow-up), info when it resumes | when it changes |
 //! | `legend` | `TextDocument` (markdown): what the colours and lines mean, with the colour range | static |
 //!
@@ -165,6 +166,10 @@ struct DeformableLog {
     pending: Vec<(i64, f64, [f64; METRICS.len()])>,
     /// `stats/<name>/<metric>` for each of [`METRICS`].
     stats: Vec<String>,
+    /// `stats/<name>/gas_pressure/<k>` and `stats/<name>/gas_volume/<k>` for each gas chamber.
+    gas: Vec<[String; 2]>,
+    /// Each frame of `pending`: each chamber's gauge pressure and volume.
+    gas_pending: Vec<Vec<[f64; 2]>>,
     surface: Vec<u32>,
     /// The surface's edges chained into polylines (surface vertex slots), for the wireframe:
     /// one strip per edge cost 0.23 ms a frame on the 3D limb, 4 times the surface itself.
@@ -464,7 +469,24 @@ impl RerunRecorder {
                 self.rec
                     .log_static(path.as_str(), &SeriesLines::new().with_names([label]))?;
             }
+            for (k, paths) in log.gas.iter().enumerate() {
+                for (quantity, path) in ["pressure", "volume"].iter().zip(paths) {
+                    let label = if several {
+                        format!("{} chamber {k} {quantity}", log.name)
+                    } else {
+                        format!("chamber {k} {quantity}")
+                    };
+                    self.rec
+                        .log_static(path.as_str(), &SeriesLines::new().with_names([label]))?;
+                }
+            }
         }
+        let gas: Vec<String> = self
+            .deformables
+            .values()
+            .filter(|d| !d.gas.is_empty())
+            .map(|d| d.name.clone())
+            .collect();
         let mut lo = Vector::splat(Real::INFINITY);
         let mut hi = Vector::splat(Real::NEG_INFINITY);
         for (_, body) in deformables.iter() {
@@ -493,7 +515,7 @@ impl RerunRecorder {
                 track: None,
             }
         };
-        blueprint::send(&self.rec, render::VIEW_CLASS, &names, framing)?;
+        blueprint::send(&self.rec, render::VIEW_CLASS, (&names, &gas), framing)?;
         self.layout_stale = false;
         Ok(())
     }
@@ -574,6 +596,14 @@ impl DeformableLog {
             .iter()
             .map(|m| format!("stats/{name}/{m}"))
             .collect();
+        let gas = (0..body.chambers().len())
+            .map(|k| {
+                [
+                    format!("stats/{name}/gas_pressure/{k}"),
+                    format!("stats/{name}/gas_volume/{k}"),
+                ]
+            })
+            .collect();
         let mut count = vec![0u32; n + 1];
         for c in mesh.cells() {
             for &i in c {
@@ -619,6 +649,8 @@ impl DeformableLog {
         DeformableLog {
             name,
             stats,
+            gas,
+            gas_pending: Vec::new(),
             surface,
             wire_strips,
             surface_cells,
@@ -638,6 +670,37 @@ impl DeformableLog {
         }
     }
 
+    /// Keeps this frame's `stats/` values (the metrics and, with gas, each chamber's pressure
+    /// and volume) until they are sent.
+    fn keep_stats(&mut self, body: &Deformable, (step, time): (i64, f64)) {
+        let r = body.report();
+        // `log_ms` (the last metric) is set by the recorder once the frame is done.
+        let values: [f64; METRICS.len()] = [
+            r.kinetic_energy as f64,
+            r.elastic_energy as f64,
+            r.gravity_energy as f64,
+            (r.kinetic_energy + r.elastic_energy + r.gravity_energy) as f64,
+            r.inverted_elements as f64,
+            r.min_volume_ratio as f64,
+            r.max_penetration as f64,
+            r.contacts as f64,
+            r.substeps as f64,
+            r.time_forces * 1e3,
+            r.time_contacts * 1e3,
+            r.time_integrate * 1e3,
+            if body.is_frozen() { 1.0 } else { 0.0 },
+            0.0,
+        ];
+        self.pending.push((step, time, values));
+        if !self.gas.is_empty() {
+            let chambers = body.chambers();
+            let row = chambers
+                .iter()
+                .map(|c| [c.pressure as f64, c.volume as f64]);
+            self.gas_pending.push(row.collect());
+        }
+    }
+
     /// Sends the kept `stats/` values, one chunk per series on the `step` and `sim_time`
     /// timelines.
     fn send_stats(&mut self, rec: &RecordingStream) -> Result<(), RecorderError> {
@@ -646,21 +709,33 @@ impl DeformableLog {
         }
         let steps: Vec<i64> = self.pending.iter().map(|p| p.0).collect();
         let times: Vec<f64> = self.pending.iter().map(|p| p.1).collect();
-        for (m, path) in self.stats.iter().enumerate() {
-            let values = self.pending.iter().map(|p| p.2[m]);
+        let send = |path: &str, values: Vec<f64>| -> Result<(), RecorderError> {
             let columns = Scalars::new(values)
                 .columns_of_unit_batches()
                 .map_err(RecordingStreamError::from)?;
             rec.send_columns(
-                path.as_str(),
+                path,
                 [
                     TimeColumn::new_sequence("step", steps.iter().copied()),
                     TimeColumn::new_duration_secs("sim_time", times.iter().copied()),
                 ],
                 columns,
             )?;
+            Ok(())
+        };
+        for (m, path) in self.stats.iter().enumerate() {
+            send(path, self.pending.iter().map(|p| p.2[m]).collect())?;
+        }
+        if self.gas_pending.len() == self.pending.len() {
+            for (k, paths) in self.gas.iter().enumerate() {
+                for (q, path) in paths.iter().enumerate() {
+                    let at = |row: &Vec<[f64; 2]>| row.get(k).map_or(f64::NAN, |c| c[q]);
+                    send(path, self.gas_pending.iter().map(at).collect())?;
+                }
+            }
         }
         self.pending.clear();
+        self.gas_pending.clear();
         Ok(())
     }
 
@@ -870,25 +945,8 @@ impl DeformableLog {
                 rgb(CONTACT),
             )?;
         }
+        self.keep_stats(body, (step, time));
         let r = body.report();
-        // `log_ms` (the last metric) is set by the recorder once the frame is done.
-        let values: [f64; METRICS.len()] = [
-            r.kinetic_energy as f64,
-            r.elastic_energy as f64,
-            r.gravity_energy as f64,
-            (r.kinetic_energy + r.elastic_energy + r.gravity_energy) as f64,
-            r.inverted_elements as f64,
-            r.min_volume_ratio as f64,
-            r.max_penetration as f64,
-            r.contacts as f64,
-            r.substeps as f64,
-            r.time_forces * 1e3,
-            r.time_contacts * 1e3,
-            r.time_integrate * 1e3,
-            if body.is_frozen() { 1.0 } else { 0.0 },
-            0.0,
-        ];
-        self.pending.push((step, time, values));
         if body.is_frozen() != self.was_frozen {
             let text = if !body.is_frozen() {
                 format!("{} resumed", self.name)
