@@ -155,8 +155,10 @@ pub(super) fn any(
 
 /// The share of a strike's closing speed its rebound may give back: the last impact's, for a
 /// strike no faster than [`REBOUND_SPAN`] times what the body came off it at (it is still
-/// bouncing off it, and a body's rebound does not grow from one bounce to the next), 1 for
-/// any other (a body thrown, pushed or fallen farther since).
+/// bouncing off it), 1 for any other (a body thrown, pushed or fallen farther since). The
+/// share is taken as the last impact's though a damped body gives back somewhat more of a
+/// slower strike: the lift that decides ([`LIFT_SHARE`] of the size) is half the fall trial's
+/// error bound.
 fn lift_ratio(rebound: &Rebound, closing: Real) -> Real {
     if rebound.entry <= 0.0 && closing <= REBOUND_SPAN * rebound.out {
         rebound.ratio.max(MIN_RATIO)
