@@ -231,7 +231,7 @@ impl DeformableSet {
             };
             body.state.velocities[i] += impulse * (share * body.rest.inv_masses[i]);
         }
-        body.step.forces_valid = false;
+        body.step.invalidate_forces();
         body.wake_up();
         true
     }

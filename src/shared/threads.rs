@@ -81,10 +81,22 @@ mod team {
     }
 }
 
+/// The fixed chunks `0..count` is cut into by [`chunked_sum`] and [`chunked_fold`], in order:
+/// a serial loop that sums its own partial results chunk by chunk, in this order, gets their
+/// bits.
+pub(crate) fn chunks(count: usize) -> impl Iterator<Item = Range<usize>> {
+    (0..count.div_ceil(CHUNK)).map(move |c| chunk_of(c, count))
+}
+
+/// Chunk `c` of `0..count`.
+fn chunk_of(c: usize, count: usize) -> Range<usize> {
+    c * CHUNK..((c + 1) * CHUNK).min(count)
+}
+
 /// `Σ part(chunk)` over `0..count` cut into fixed chunks, the chunks' sums added in order (on
 /// rayon's threads when there are several chunks and threads).
 pub(crate) fn chunked_sum(count: usize, part: impl Fn(Range<usize>) -> Real + Sync) -> Real {
-    let chunk = |c: usize| part(c * CHUNK..((c + 1) * CHUNK).min(count));
+    let chunk = |c: usize| part(chunk_of(c, count));
     let chunks = count.div_ceil(CHUNK);
     #[cfg(feature = "parallel")]
     if chunks > 1 && rayon::current_num_threads() > 1 {
@@ -102,7 +114,7 @@ pub(crate) fn chunked_fold<T: Send>(
     part: impl Fn(Range<usize>) -> T + Sync,
     combine: impl Fn(T, T) -> T,
 ) -> Option<T> {
-    let chunk = |c: usize| part(c * CHUNK..((c + 1) * CHUNK).min(count));
+    let chunk = |c: usize| part(chunk_of(c, count));
     let chunks = count.div_ceil(CHUNK);
     #[cfg(feature = "parallel")]
     if chunks > 1 && rayon::current_num_threads() > 1 {

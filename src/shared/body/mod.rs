@@ -217,8 +217,7 @@ impl Deformable {
     pub(crate) fn measured_energy(&mut self) -> (Real, Option<Ratios>) {
         let x = &self.state.positions;
         let memo = &mut self.step.energy_memo;
-        let bits = |v: &Vector| v.to_array().map(Real::to_bits);
-        if memo.at.len() == x.len() && memo.at.iter().zip(x).all(|(a, b)| bits(a) == bits(b)) {
+        if same_bits(&memo.at, x) {
             return (memo.energy, memo.ratios);
         }
         let (energy, ratios) = self.state.elements.elastic_energy_and_ratios(x);
@@ -230,12 +229,53 @@ impl Deformable {
         (energy, ratios)
     }
 
+    /// The measure of a step's end: [`Deformable::measured_energy`], which a body that stepped
+    /// explicitly, with a model that measures in its force pass, takes in one pass with the
+    /// forces the next step starts from (see [`EnergyMemo`](parts::EnergyMemo)).
+    pub(crate) fn measure_end(&mut self) -> (Real, Option<Ratios>) {
+        let asked = std::mem::take(&mut self.step.energy_memo.asked);
+        if !(asked && self.state.elements.measures_in_pass()) {
+            return self.measured_energy();
+        }
+        let (x, v) = (&self.state.positions, &self.state.velocities);
+        let memo = &mut self.step.energy_memo;
+        memo.forces = false;
+        let fused = if memo.fuse {
+            if memo.acc.force.len() == x.len() {
+                memo.acc.clear();
+            } else {
+                memo.acc = Accumulator::new(x.len());
+            }
+            self.state.elements.accumulate_measured(x, v, &mut memo.acc)
+        } else {
+            None
+        };
+        let measured = match fused {
+            Some(measured) => {
+                memo.at.clear();
+                memo.at.extend_from_slice(x);
+                (memo.energy, memo.ratios) = measured;
+                (memo.forces, memo.limiter) = (true, Real::INFINITY);
+                measured
+            }
+            None => self.measured_energy(),
+        };
+        let memo = &mut self.step.energy_memo;
+        let (x, v) = (&self.state.positions, &self.state.velocities);
+        if same_bits(&memo.at, x) {
+            memo.velocities.clear();
+            memo.velocities.extend_from_slice(v);
+            memo.pending = true;
+        }
+        measured
+    }
+
     /// Flows the cells strained past yield over a step of `dt` (plastic bodies only); returns
     /// the elastic energy released. The forces and the energy measured before are stale after
     /// a flow.
     pub(crate) fn flow(&mut self, dt: Real) -> Option<Real> {
         let released = self.state.elements.flow(&self.state.positions, dt)?;
-        self.step.forces_valid = false;
+        self.step.invalidate_forces();
         self.step.energy_memo.at.clear();
         Some(released)
     }
@@ -302,7 +342,7 @@ impl Deformable {
         };
         let volume = c.volume(x);
         c.refill(gas, volume)?;
-        self.step.forces_valid = false;
+        self.step.invalidate_forces();
         self.step.energy_memo.at.clear();
         self.wake_up();
         Ok(())
@@ -327,7 +367,7 @@ impl Deformable {
     /// For the shape-based model this also advances its warm-started rotation estimates, as a
     /// substep would.
     pub fn element_forces(&mut self) -> &[Vector] {
-        self.step.forces_valid = false;
+        self.step.invalidate_forces();
         self.refresh_forces();
         &self.step.acc.force
     }
@@ -340,6 +380,19 @@ impl Deformable {
             return;
         }
         let step = &mut self.step;
+        let memo = &mut step.energy_memo;
+        memo.asked = true;
+        if std::mem::take(&mut memo.pending) {
+            let (x, v) = (&self.state.positions, &self.state.velocities);
+            memo.fuse = same_bits(&memo.at, x) && same_bits(&memo.velocities, v);
+            if memo.fuse && memo.forces {
+                std::mem::swap(&mut step.acc, &mut memo.acc);
+                step.limiter = memo.limiter;
+                memo.forces = false;
+                step.forces_valid = true;
+                return;
+            }
+        }
         step.acc.clear();
         step.limiter = self.state.elements.accumulate_capped(
             &self.state.positions,
@@ -378,7 +431,7 @@ impl Deformable {
     /// Resumes a frozen body.
     pub fn unfreeze(&mut self) {
         self.activation.frozen = false;
-        self.step.forces_valid = false;
+        self.step.invalidate_forces();
     }
 
     /// Whether the body is asleep: it rested long enough with nothing moving near it, and is
@@ -461,7 +514,7 @@ impl Deformable {
             let u = &mut self.state.velocities[i];
             *u = rigid + (*u - rigid) * keep;
         }
-        self.step.forces_valid = false;
+        self.step.invalidate_forces();
     }
 
     /// Whether the body's surface meets itself (see [`DeformableBuilder::self_contact`]).
@@ -482,7 +535,7 @@ impl Deformable {
         // Shape matching's rotations follow the new shape (its energy reads them).
         self.state.elements.refit_rotations(positions);
         self.refit_surface();
-        self.step.forces_valid = false;
+        self.step.invalidate_forces();
         self.wake_up();
         Ok(())
     }
@@ -492,7 +545,7 @@ impl Deformable {
     pub fn set_velocities(&mut self, velocities: &[Vector]) -> Result<(), BuildError> {
         check_state("velocities", velocities, self.state.velocities.len())?;
         self.state.velocities.copy_from_slice(velocities);
-        self.step.forces_valid = false;
+        self.step.invalidate_forces();
         self.wake_up();
         Ok(())
     }
@@ -501,7 +554,7 @@ impl Deformable {
     pub fn set_uniform_velocity(&mut self, velocity: Vector) -> Result<(), BuildError> {
         check_state("velocity", &[velocity], 1)?;
         self.state.velocities.fill(velocity);
-        self.step.forces_valid = false;
+        self.step.invalidate_forces();
         self.wake_up();
         Ok(())
     }
@@ -636,9 +689,15 @@ impl Deformable {
     }
 
     fn bindings_changed(&mut self) {
-        self.step.forces_valid = false;
+        self.step.invalidate_forces();
         self.wake_up();
     }
+}
+
+/// Whether `a` and `b` hold the same vectors, bit for bit.
+fn same_bits(a: &[Vector], b: &[Vector]) -> bool {
+    let bits = |v: &Vector| v.to_array().map(Real::to_bits);
+    a.len() == b.len() && a.iter().zip(b).all(|(a, b)| bits(a) == bits(b))
 }
 
 pub(crate) fn check_state(

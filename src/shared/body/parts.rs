@@ -146,11 +146,50 @@ pub(crate) struct StepBuffers {
 /// An elastic energy and the cells' volume ratios, and the positions they were measured at
 /// (none measured yet when empty). The rest data of the body's model does not change after it
 /// is built, so the positions alone say whether the measure still holds.
-#[derive(Clone, Debug, Default)]
+///
+/// The end of an explicit step is where the next step evaluates its first forces, so for a
+/// model that measures in its force pass the step's last measure evaluates those forces too
+/// ([`Deformable::measure_end`](super::Deformable::measure_end)): one pass over the cells
+/// instead of two. They are kept with the velocities they were evaluated at, and taken if the
+/// next evaluation finds the same state, bit for bit; a body whose state changes in between
+/// (a bone moving its bound nodes) evaluates them again, so its next steps measure the energy
+/// alone until a step finds the state it ended in.
+#[derive(Clone, Debug)]
 pub(crate) struct EnergyMemo {
     pub at: Vec<Vector>,
     pub energy: Real,
     pub ratios: Option<Ratios>,
+    /// The velocities of the last end-of-step measure.
+    pub velocities: Vec<Vector>,
+    /// The forces at (`at`, `velocities`), when `forces`: the next step's first.
+    pub acc: Accumulator,
+    /// Whether `acc` holds the forces at (`at`, `velocities`), and `limiter` their limiter.
+    pub forces: bool,
+    pub limiter: Real,
+    /// Whether the next evaluation of the forces is the first since an end-of-step measure.
+    pub pending: bool,
+    /// Whether the next end-of-step measure evaluates the forces too.
+    pub fuse: bool,
+    /// Whether the forces were asked for since the last end-of-step measure (the body steps
+    /// explicitly).
+    pub asked: bool,
+}
+
+impl Default for EnergyMemo {
+    fn default() -> Self {
+        EnergyMemo {
+            at: Vec::new(),
+            energy: 0.0,
+            ratios: None,
+            velocities: Vec::new(),
+            acc: Accumulator::default(),
+            forces: false,
+            limiter: Real::INFINITY,
+            pending: false,
+            fuse: true,
+            asked: false,
+        }
+    }
 }
 
 impl StepBuffers {
@@ -183,7 +222,13 @@ impl StepBuffers {
     pub fn restore(&mut self, state: &mut State) {
         state.positions.copy_from_slice(&self.saved_positions);
         state.velocities.copy_from_slice(&self.saved_velocities);
+        self.invalidate_forces();
+    }
+
+    /// Marks the element forces stale: the state or the model changed.
+    pub fn invalidate_forces(&mut self) {
         self.forces_valid = false;
+        self.energy_memo.forces = false;
     }
 }
 

@@ -70,6 +70,20 @@ pub(crate) trait ElementLaw: std::fmt::Debug + Send + Sync {
     /// same bits on any thread count).
     fn energy(&self, x: &[Vector]) -> Real;
 
+    /// Whether [`ElementLaw::accumulate_measured`] measures the energy in the force pass
+    /// itself (its default takes a second pass).
+    fn measures_in_pass(&self) -> bool {
+        false
+    }
+
+    /// [`ElementLaw::accumulate`] and [`ElementLaw::energy`] at `x` (the same bits of both),
+    /// for a model whose forces take no volumetric term; returns the energy. The limiter is
+    /// not measured: only a model without one answers [`ElementLaw::measures_in_pass`].
+    fn accumulate_measured(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
+        self.accumulate(x, v, acc, None);
+        self.energy(x)
+    }
+
     /// Adds every term's state-independent stiffness and damping bounds into `bounds`.
     fn constant_bounds(&self, bounds: &mut NodeBounds);
 

@@ -398,6 +398,43 @@ impl ModelState {
         limit
     }
 
+    /// Whether [`ModelState::accumulate_measured`] measures (on the thread count of now).
+    pub fn measures_in_pass(&self) -> bool {
+        #[cfg(feature = "parallel")]
+        if self.split.is_some() && rayon::current_num_threads() > 1 {
+            return false;
+        }
+        self.elements.measures_in_pass() && !self.elements.sums_volume()
+    }
+
+    /// [`ModelState::accumulate_capped`] (its limiter infinite) and
+    /// [`ModelState::elastic_energy_and_ratios`] at `x`, the same bits of both, in one pass over
+    /// the terms, for a model that measures in its force pass and has no limiter (springs);
+    /// `None`, having added nothing, for another model or when the forces are evaluated on
+    /// several threads (their energy then takes its own pass).
+    pub fn accumulate_measured(
+        &mut self,
+        x: &[Vector],
+        v: &[Vector],
+        acc: &mut Accumulator,
+    ) -> Option<(Real, Option<volume::Ratios>)> {
+        if !self.measures_in_pass() {
+            return None;
+        }
+        assert!(v.len() == x.len() && acc.force.len() == x.len());
+        assert!(acc.stiffness.len() == x.len() && acc.damping.len() == x.len());
+        self.bounds.add_to(acc);
+        let elastic = self.elements.accumulate_measured(x, v, acc);
+        let volume = self.volume.as_ref().map(|v| v.accumulate_measured(x, acc));
+        let gas = self.gas.as_ref().map(|g| {
+            g.accumulate(x, acc);
+            g.energy(x)
+        });
+        // Summed as `elastic_energy_and_ratios` sums them.
+        let energy = volume.map_or(0.0, |(e, _)| e) + elastic + gas.unwrap_or(0.0);
+        Some((energy, volume.map(|(_, r)| r)))
+    }
+
     fn accumulate_elements(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
         #[cfg(feature = "parallel")]
         if let (Some(slabs), Some(er)) = (&self.slabs, self.elements.edge_repulsion()) {
@@ -539,7 +576,7 @@ impl ModelState {
         let (energy, ratios) = super::threads::chunked_fold(
             v.cells().len() / SIMPLEX_ARITY,
             |cells| v.energy_and_ratios(x, cells),
-            |(e1, r1), (e2, r2)| (e1 + e2, r1.and(r2)),
+            volume::both,
         )
         .unwrap_or((0.0, volume::Ratios::NONE));
         let gas = self.gas.as_ref().map_or(0.0, |g| g.energy(x));

@@ -26,9 +26,12 @@
 //!
 //! [`NonlinearSprings`]: super::ElementModel::NonlinearSprings
 
+use std::ops::Range;
+
 use super::super::material::Resolved;
 use super::super::math::{Real, Vector, SIMPLEX_ARITY};
 use super::super::mesh::Mesh;
+use super::super::threads;
 use super::lanes::{each, Lane, LaneVector, LANES};
 use super::{reduced_mass, Accumulator, NodeBounds};
 
@@ -164,26 +167,43 @@ impl Springs {
     /// Adds the spring forces (and, for the nonlinear law, the stiffness that changes with the
     /// length) into `acc`. The constant bounds are added by [`Springs::constant_bounds`].
     pub fn accumulate(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) {
+        let all = 0..self.pairs.len();
         match self.law {
-            Law::Linear => self.accumulate_law::<false>(x, v, acc),
-            Law::Nonlinear => self.accumulate_law::<true>(x, v, acc),
-        }
+            Law::Linear => self.accumulate_law::<false, false>(all, x, v, acc),
+            Law::Nonlinear => self.accumulate_law::<true, false>(all, x, v, acc),
+        };
     }
 
-    fn accumulate_law<const NONLINEAR: bool>(
+    /// [`Springs::accumulate`] (the same bits) and the springs' elastic energy, that of
+    /// [`ElementLaw::energy`](super::ElementLaw::energy) (the same bits: summed chunk by chunk
+    /// as [`threads::chunked_sum`] sums it), in one pass.
+    pub fn accumulate_measured(&self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
+        threads::chunks(self.pairs.len())
+            .map(|springs| match self.law {
+                Law::Linear => self.accumulate_law::<false, true>(springs, x, v, acc),
+                Law::Nonlinear => self.accumulate_law::<true, true>(springs, x, v, acc),
+            })
+            .sum()
+    }
+
+    /// Adds the forces of `springs` (and, for the nonlinear law, their stiffness rows) into
+    /// `acc`; with `MEASURE`, returns their energy as [`Springs::energy_of`] gives it (else 0).
+    fn accumulate_law<const NONLINEAR: bool, const MEASURE: bool>(
         &self,
+        springs: Range<usize>,
         x: &[Vector],
         v: &[Vector],
         acc: &mut Accumulator,
-    ) {
+    ) -> Real {
         // Equal lengths let one bounds check per index cover every array.
         let n = x.len();
         let (v, force, stiffness) = (&v[..n], &mut acc.force[..n], &mut acc.stiffness[..n]);
         if !NONLINEAR {
-            self.accumulate_linear(x, v, force);
-            return;
+            return self.accumulate_linear::<MEASURE>(springs, x, v, force);
         }
-        for (((&[i, j], &l0), &k), &c) in self.terms(0) {
+        let mut e = 0.0;
+        let first = springs.start;
+        for (s, (((&[i, j], &l0), &k), &c)) in self.terms(first).take(springs.len()).enumerate() {
             let (f, k_row) = term::<NONLINEAR>([i, j], l0, k, c, x, v);
             let (i, j) = (i as usize, j as usize);
             force[i] += f;
@@ -192,16 +212,27 @@ impl Springs {
                 stiffness[i] += k_row;
                 stiffness[j] += k_row;
             }
+            if MEASURE {
+                e += self.energy_at(first + s, x[i].distance(x[j]));
+            }
         }
+        e
     }
 
-    /// The linear law's forces, added spring by spring as [`linear_force`] gives them
-    /// (the same bits), evaluated [`LANES`] springs at a time.
-    fn accumulate_linear(&self, x: &[Vector], v: &[Vector], force: &mut [Vector]) {
-        let count = self.pairs.len();
-        for first in (0..count).step_by(LANES) {
+    /// The linear law's forces of `springs`, added spring by spring as [`linear_force`] gives
+    /// them (the same bits), evaluated [`LANES`] springs at a time; with `MEASURE`, their
+    /// energy as [`Springs::energy_of`] gives it (else 0).
+    fn accumulate_linear<const MEASURE: bool>(
+        &self,
+        springs: Range<usize>,
+        x: &[Vector],
+        v: &[Vector],
+        force: &mut [Vector],
+    ) -> Real {
+        let mut e = 0.0;
+        for first in springs.clone().step_by(LANES) {
             // The last batch repeats its last spring in the lanes past the end.
-            let s: [usize; LANES] = each(|l| (first + l).min(count - 1));
+            let s: [usize; LANES] = each(|l| (first + l).min(springs.end - 1));
             let ends =
                 |e: usize, p: &[Vector]| LaneVector::gather(|l| p[self.pairs[s[l]][e] as usize]);
             let d = ends(0, x) - ends(1, x);
@@ -213,12 +244,17 @@ impl Springs {
             let c = Lane::new(each(|i| self.c[s[i]]));
             let along = (ends(0, v) - ends(1, v)).dot(n);
             let f = (n * (k * (rest - l) - c * along)).or_zero(!dead).lanes();
-            for (lane, f) in f.iter().enumerate().take(count - first) {
+            for (lane, f) in f.iter().enumerate().take(springs.end - first) {
                 let [i, j] = self.pairs[first + lane];
-                force[i as usize] += *f;
-                force[j as usize] -= *f;
+                let (i, j) = (i as usize, j as usize);
+                force[i] += *f;
+                force[j] -= *f;
+                if MEASURE {
+                    e += self.energy_at(first + lane, x[i].distance(x[j]));
+                }
             }
         }
+        e
     }
 
     /// Adds the forces of springs `ids` (and, for the nonlinear law, their stiffness rows) into
@@ -318,17 +354,22 @@ impl Springs {
     }
 
     /// The elastic energy of springs `springs`.
-    pub fn energy_of(&self, x: &[Vector], springs: std::ops::Range<usize>) -> Real {
+    pub fn energy_of(&self, x: &[Vector], springs: Range<usize>) -> Real {
         let mut e = 0.0;
         for s in springs {
             let [i, j] = self.pairs[s];
-            let l = x[i as usize].distance(x[j as usize]);
-            e += match self.law {
-                Law::Linear => 0.5 * self.k[s] * (l - self.rest[s]).powi(2),
-                Law::Nonlinear => super::nonlinear_springs::energy(l, self.rest[s], self.k[s]),
-            };
+            e += self.energy_at(s, x[i as usize].distance(x[j as usize]));
         }
         e
+    }
+
+    /// The energy of spring `s` at length `l`.
+    #[inline(always)]
+    fn energy_at(&self, s: usize, l: Real) -> Real {
+        match self.law {
+            Law::Linear => 0.5 * self.k[s] * (l - self.rest[s]).powi(2),
+            Law::Nonlinear => super::nonlinear_springs::energy(l, self.rest[s], self.k[s]),
+        }
     }
 }
 
@@ -377,7 +418,15 @@ impl super::ElementLaw for Springs {
     }
 
     fn energy(&self, x: &[Vector]) -> Real {
-        super::super::threads::chunked_sum(self.pairs.len(), |r| self.energy_of(x, r))
+        threads::chunked_sum(self.pairs.len(), |r| self.energy_of(x, r))
+    }
+
+    fn measures_in_pass(&self) -> bool {
+        true
+    }
+
+    fn accumulate_measured(&mut self, x: &[Vector], v: &[Vector], acc: &mut Accumulator) -> Real {
+        Springs::accumulate_measured(self, x, v, acc)
     }
 
     fn constant_bounds(&self, bounds: &mut NodeBounds) {
@@ -430,8 +479,57 @@ impl super::ElementLaw for Springs {
 
 #[cfg(test)]
 mod tests {
+    use super::super::super::body::DeformableBuilder;
+    use super::super::super::material::Material;
     use super::super::super::math::{Vector, DIM};
+    use super::super::super::mesh::CellKind;
+    use super::super::{squashed, ElementModel};
     use super::*;
+
+    #[test]
+    fn a_force_pass_that_measures_gives_the_bits_of_the_forces_energy_and_ratios_apart() {
+        // Enough cells and springs for several chunks of the energy's sums.
+        let res = if DIM == 3 { 9 } else { 25 };
+        for model in [ElementModel::Springs, ElementModel::NonlinearSprings] {
+            // With the volumetric term (ν = 0.3) and without (the lattice's own ratio).
+            let lattice = super::super::lattice_poisson(model, CellKind::Simplex).unwrap();
+            for nu in [0.3, lattice] {
+                let body = DeformableBuilder::cuboid(Vector::splat(0.5), [res; DIM])
+                    .model(model)
+                    .material(Material {
+                        poisson_ratio: nu,
+                        ..Material::default()
+                    })
+                    .build()
+                    .unwrap();
+                let mut state = body.state.elements.clone();
+                assert!(state.measures_in_pass());
+                assert_eq!(state.volume.is_some(), nu != lattice, "{model:?}");
+                let x = squashed(&body.state.positions, 0.7, 0.2);
+                let v: Vec<Vector> = x.iter().map(|p| *p * (0.5 * p[0])).collect();
+                let n = x.len();
+                let (mut apart, mut fused) = (Accumulator::new(n), Accumulator::new(n));
+                let limit = state.accumulate_capped(&x, &v, &mut apart, Real::INFINITY);
+                let measured = state.accumulate_measured(&x, &v, &mut fused);
+                assert_eq!(measured, Some(state.elastic_energy_and_ratios(&x)));
+                assert!(measured.unwrap().0 > 0.0);
+                assert_eq!(limit, Real::INFINITY);
+                let bits = |a: &Accumulator| {
+                    let f = a.force.iter().flat_map(|f| f.to_array()).map(Real::to_bits);
+                    let k = a.stiffness.iter().chain(&a.damping).map(|k| k.to_bits());
+                    f.chain(k).collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&fused), bits(&apart), "{model:?}, ν {nu}");
+            }
+        }
+        for model in [ElementModel::EdgeRepulsion, ElementModel::SHAPE_MATCHING] {
+            let body = DeformableBuilder::cuboid(Vector::splat(0.5), [3; DIM])
+                .model(model)
+                .build()
+                .unwrap();
+            assert!(!body.state.elements.measures_in_pass(), "{model:?}");
+        }
+    }
 
     #[test]
     fn the_linear_springs_in_lanes_add_the_bits_of_one_by_one() {

@@ -9,7 +9,10 @@
 //! is that of the material asked), but the term alone is not, so the implicit step leaves its
 //! block out then (its gradient is exact either way).
 
+use std::ops::Range;
+
 use super::super::math::{self, Matrix, Real, Vector, DIM, DIM_FACTORIAL, SIMPLEX_ARITY};
+use super::super::threads;
 use super::lanes::{self, each, Lane, LaneVector, LANES};
 use super::Accumulator;
 
@@ -90,13 +93,34 @@ impl Volume {
     /// Adds the forces and their stiffness bounds (`|κ| V0 |g_a| Σ_b |g_b| / D0²`, the
     /// Gershgorin row of `κ V0 ∇J ∇Jᵀ`), [`LANES`] cells at a time.
     pub fn accumulate(&self, x: &[Vector], acc: &mut Accumulator) {
+        self.accumulate_cells::<false>(0..self.d0.len(), x, acc);
+    }
+
+    /// [`Volume::accumulate`] (the same bits) and the cells' energy and volume ratios, those
+    /// of [`Volume::energy_and_ratios`] over the chunks of [`threads::chunked_fold`] combined
+    /// by [`both`] (the same bits), in one pass.
+    pub fn accumulate_measured(&self, x: &[Vector], acc: &mut Accumulator) -> (Real, Ratios) {
+        threads::chunks(self.d0.len())
+            .map(|cells| self.accumulate_cells::<true>(cells, x, acc))
+            .reduce(both)
+            .unwrap_or((0.0, Ratios::NONE))
+    }
+
+    /// Adds the forces and stiffness bounds of `cells`; with `MEASURE`, returns their energy
+    /// and volume ratios as [`Volume::energy_and_ratios`] gives them (else nothing measured).
+    fn accumulate_cells<const MEASURE: bool>(
+        &self,
+        cells: Range<usize>,
+        x: &[Vector],
+        acc: &mut Accumulator,
+    ) -> (Real, Ratios) {
         let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
         let n = x.len();
         let (force, stiffness) = (&mut acc.force[..n], &mut acc.stiffness[..n]);
-        let count = ids.len();
-        for first in (0..count).step_by(LANES) {
+        let mut measure = LaneMeasure::new();
+        for first in cells.clone().step_by(LANES) {
             // The last batch repeats its last cell in the lanes past the end.
-            let batch: [usize; LANES] = each(|l| (first + l).min(count - 1));
+            let batch: [usize; LANES] = each(|l| (first + l).min(cells.end - 1));
             let p: [LaneVector; SIMPLEX_ARITY] =
                 each(|a| LaneVector::gather(|l| x[ids[batch[l]][a] as usize]));
             let (d, g) = lanes::simplex_gradients(&p);
@@ -104,14 +128,18 @@ impl Volume {
             let (f, row) = self.cell_lanes(batch, d, &g, &length);
             let f: [[Vector; LANES]; SIMPLEX_ARITY] = each(|a| f[a].lanes());
             let row: [[Real; LANES]; SIMPLEX_ARITY] = each(|a| row[a].to_array());
-            for l in 0..LANES.min(count - first) {
+            for l in 0..LANES.min(cells.end - first) {
                 for a in 0..SIMPLEX_ARITY {
                     let i = ids[first + l][a] as usize;
                     force[i] += f[a][l];
                     stiffness[i] += row[a][l];
                 }
             }
+            if MEASURE {
+                measure.add(self, batch, cells.end - first, d);
+            }
         }
+        measure.finish()
     }
 
     /// [`LANES`] cells `cells`, from their `D`, its gradients and their lengths: the force on
@@ -191,7 +219,7 @@ impl Volume {
     }
 
     /// The elastic energy of cells `cells`.
-    pub fn energy_of(&self, x: &[Vector], cells: std::ops::Range<usize>) -> Real {
+    pub fn energy_of(&self, x: &[Vector], cells: Range<usize>) -> Real {
         self.energy_and_ratios(x, cells).0
     }
 
@@ -201,43 +229,86 @@ impl Volume {
     ///
     /// [`Mesh::cell_quality`]: super::super::mesh::Mesh::cell_quality
     #[inline]
-    pub fn energy_and_ratios(&self, x: &[Vector], cells: std::ops::Range<usize>) -> (Real, Ratios) {
+    pub fn energy_and_ratios(&self, x: &[Vector], cells: Range<usize>) -> (Real, Ratios) {
         let (ids, _) = self.cells.as_chunks::<SIMPLEX_ARITY>();
-        let lane_index = Lane::new(each(|l| l as Real));
-        let factorial = Lane::splat(DIM_FACTORIAL);
-        let (mut e, mut inverted) = (Lane::ZERO, 0);
-        let (mut least, mut most) = (Lane::splat(Real::INFINITY), Lane::splat(-Real::INFINITY));
+        let mut measure = LaneMeasure::new();
         for first in cells.clone().step_by(LANES) {
             // The last batch repeats its last cell in the lanes past the end, and counts it
             // once.
             let batch: [usize; LANES] = each(|l| (first + l).min(cells.end - 1));
-            let counted = lane_index.simd_lt(Lane::splat((cells.end - first) as Real));
             let p: [LaneVector; SIMPLEX_ARITY] =
                 each(|a| LaneVector::gather(|l| x[ids[batch[l]][a] as usize]));
             // `D` alone: the optimiser drops the gradients.
             let (d, _) = lanes::simplex_gradients(&p);
-            let d0 = Lane::new(each(|l| self.d0[batch[l]]));
-            let k = Lane::new(each(|l| self.k[batch[l]]));
-            let strain = d / d0 - Lane::ONE;
-            e += counted.select(Lane::splat(0.5) * k * strain * strain, Lane::ZERO);
-            let ratio = (d / factorial) / (d0 / factorial);
-            inverted += (ratio.simd_le(Lane::ZERO) & counted)
-                .to_bitmask()
-                .count_ones() as usize;
-            least = counted
-                .select(ratio, Lane::splat(Real::INFINITY))
-                .fast_min(least);
-            most = counted
-                .select(ratio, Lane::splat(-Real::INFINITY))
-                .fast_max(most);
+            measure.add(self, batch, cells.end - first, d);
         }
-        let ratios = Ratios {
-            inverted,
-            least: least.to_array().into_iter().fold(Real::INFINITY, Real::min),
-            most: most.to_array().into_iter().fold(-Real::INFINITY, Real::max),
-        };
-        (e.reduce_add(), ratios)
+        measure.finish()
     }
+}
+
+/// The energy and volume ratios of cells measured [`LANES`] at a time, lane by lane.
+struct LaneMeasure {
+    energy: Lane,
+    inverted: usize,
+    least: Lane,
+    most: Lane,
+}
+
+impl LaneMeasure {
+    fn new() -> Self {
+        LaneMeasure {
+            energy: Lane::ZERO,
+            inverted: 0,
+            least: Lane::splat(Real::INFINITY),
+            most: Lane::splat(-Real::INFINITY),
+        }
+    }
+
+    /// Adds the cells `batch` of `volume`, of determinants `d`, of which the first `counted`
+    /// lanes count (the others repeat the last cell).
+    #[inline(always)]
+    fn add(&mut self, volume: &Volume, batch: [usize; LANES], counted: usize, d: Lane) {
+        let lane_index = Lane::new(each(|l| l as Real));
+        let counted = lane_index.simd_lt(Lane::splat(counted as Real));
+        let d0 = Lane::new(each(|l| volume.d0[batch[l]]));
+        let k = Lane::new(each(|l| volume.k[batch[l]]));
+        let strain = d / d0 - Lane::ONE;
+        self.energy += counted.select(Lane::splat(0.5) * k * strain * strain, Lane::ZERO);
+        let factorial = Lane::splat(DIM_FACTORIAL);
+        let ratio = (d / factorial) / (d0 / factorial);
+        self.inverted += (ratio.simd_le(Lane::ZERO) & counted)
+            .to_bitmask()
+            .count_ones() as usize;
+        self.least = counted
+            .select(ratio, Lane::splat(Real::INFINITY))
+            .fast_min(self.least);
+        self.most = counted
+            .select(ratio, Lane::splat(-Real::INFINITY))
+            .fast_max(self.most);
+    }
+
+    fn finish(self) -> (Real, Ratios) {
+        let ratios = Ratios {
+            inverted: self.inverted,
+            least: self
+                .least
+                .to_array()
+                .into_iter()
+                .fold(Real::INFINITY, Real::min),
+            most: self
+                .most
+                .to_array()
+                .into_iter()
+                .fold(-Real::INFINITY, Real::max),
+        };
+        (self.energy.reduce_add(), ratios)
+    }
+}
+
+/// The energy and volume ratios of two sets of cells, as [`Volume::energy_and_ratios`]
+/// gives them, taken together (`a`'s first).
+pub(crate) fn both((e1, r1): (Real, Ratios), (e2, r2): (Real, Ratios)) -> (Real, Ratios) {
+    (e1 + e2, r1.and(r2))
 }
 
 /// The volume ratios `V/V0` of some cells.

@@ -56,7 +56,7 @@ impl Quality {
     /// At the body's positions (`most`: the stretch limit, infinite for none).
     pub fn of(body: &mut Deformable, most: Real) -> Quality {
         let limited = most.is_finite();
-        let (elastic, ratios) = body.measured_energy();
+        let (elastic, ratios) = body.measure_end();
         let (mesh, x) = (&body.rest.mesh, &body.state.positions);
         let ratios = ratios.unwrap_or_else(|| {
             let part = |cells: std::ops::Range<usize>| {
@@ -79,5 +79,100 @@ impl Quality {
             stretched: limited && ratios.most > most,
             elastic,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::body::DeformableBuilder;
+    use super::super::super::math::UP;
+    use super::super::super::model::{Accumulator, ElementModel};
+    use super::super::super::rapier::geometry::{Cuboid, SharedShape};
+    use super::super::super::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
+    use super::super::super::world::DeformableWorld;
+    use super::*;
+
+    #[test]
+    fn a_springs_step_ends_with_the_forces_its_next_step_starts_from() {
+        for model in [ElementModel::Springs, ElementModel::NonlinearSprings] {
+            let scene = || {
+                let mut world = DeformableWorld::new();
+                let mut half = Vector::splat(5.0);
+                half[1] = 0.5;
+                world.physics.insert(
+                    RigidBodyBuilder::fixed().translation(-UP * 0.5),
+                    ColliderBuilder::new(SharedShape::new(Cuboid::new(half))),
+                );
+                let body = DeformableBuilder::cuboid(Vector::splat(0.25), [5; DIM])
+                    .model(model)
+                    .translation(UP * 0.3)
+                    .build()
+                    .unwrap();
+                let h = world.insert(body);
+                (world, h)
+            };
+            let ((mut world, h), (mut twin, _)) = (scene(), scene());
+            for step in 0..40 {
+                world.step();
+                let body = world.deformables.get_mut(h).unwrap();
+                let memo = &body.step.energy_memo;
+                assert!(memo.forces && memo.pending, "{model:?}, step {step}");
+                // What the next step takes is what it would evaluate.
+                let (x, v) = (&body.state.positions, &body.state.velocities);
+                let mut fresh = Accumulator::new(x.len());
+                let limit = body.state.elements.accumulate(x, v, &mut fresh);
+                let kept = body.step.energy_memo.acc.clone();
+                body.refresh_forces();
+                assert!(!body.step.energy_memo.forces, "{model:?}: not taken");
+                let bits = |a: &Accumulator| {
+                    let f = a.force.iter().flat_map(|f| f.to_array()).map(Real::to_bits);
+                    let k = a.stiffness.iter().chain(&a.damping).map(|k| k.to_bits());
+                    f.chain(k).collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&kept), bits(&fresh), "{model:?}, step {step}");
+                assert_eq!(bits(&body.step.acc), bits(&fresh), "{model:?}, step {step}");
+                assert_eq!(body.step.limiter, limit);
+                // The twin evaluates every step's first forces afresh: the same steps.
+                let twin_body = twin.deformables.get_mut(h).unwrap();
+                let v = twin_body.velocities().to_vec();
+                twin_body.set_velocities(&v).unwrap();
+                twin.step();
+                let twin_body = twin.deformables.get(h).unwrap();
+                assert_eq!(
+                    (twin_body.positions(), twin_body.velocities()),
+                    (
+                        world.deformables.get(h).unwrap().positions(),
+                        world.deformables.get(h).unwrap().velocities()
+                    ),
+                    "{model:?}, step {step}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_body_whose_state_changes_between_steps_stops_keeping_forces_and_takes_it_up_again() {
+        let mut world = DeformableWorld::new();
+        let body = DeformableBuilder::cuboid(Vector::splat(0.25), [4; DIM])
+            .model(ElementModel::Springs)
+            .build()
+            .unwrap();
+        let h = world.insert(body);
+        world.step();
+        assert!(world.deformables.get(h).unwrap().step.energy_memo.forces);
+        // Pushed between steps: the kept forces are not those of the state the step starts
+        // from, and the next step's end measures the energy alone.
+        for _ in 0..2 {
+            let body = world.deformables.get_mut(h).unwrap();
+            body.state.velocities[0] += Vector::splat(1e-3);
+            world.step();
+            let memo = &world.deformables.get(h).unwrap().step.energy_memo;
+            assert!(!memo.fuse && !memo.forces && memo.pending);
+        }
+        // Left alone, the next step finds the state the last ended in, and keeps forces again.
+        world.step();
+        assert!(world.deformables.get(h).unwrap().step.energy_memo.fuse);
+        world.step();
+        assert!(world.deformables.get(h).unwrap().step.energy_memo.forces);
     }
 }

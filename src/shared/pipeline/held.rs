@@ -332,7 +332,7 @@ fn damp_composite(
             };
             *u += towards * pull;
         }
-        body.step.forces_valid = false;
+        body.step.invalidate_forces();
     }
 }
 

@@ -239,7 +239,7 @@ fn move_positions(
             &m.sc.bones.targets,
             &mut body.state.positions,
         );
-        body.step.forces_valid = false;
+        body.step.invalidate_forces();
         m.stats.substeps += 1;
     }
 }
@@ -604,7 +604,7 @@ fn next_substep(
         // substep is too (`Deformable::refresh_forces`).
         if integrator.uses_forces(m.body) && stable > m.body.step.crossing_cap {
             m.body.step.crossing_cap = Real::INFINITY;
-            m.body.step.forces_valid = false;
+            m.body.step.invalidate_forces();
             timed(&mut m.times.forces, || m.body.refresh_forces());
             bound.limiter = integrator.bound(m.body, calibrated).limiter;
         }

@@ -65,7 +65,7 @@ pub(super) fn carry_if_jumped(
         .collect();
     // The warm starts have the body's own length: this cannot fail.
     let _ = state.elements.set_warm_start(&turned);
-    body.step.forces_valid = false;
+    body.step.invalidate_forces();
     // The bound nodes stay on their bones where the bones end: no drag back along the jump.
     for m in bones.attachment_motion.iter().flatten() {
         let motion = &mut broad.motions[*m];
