@@ -430,6 +430,10 @@ pub(crate) fn near_colliders(
     out.sort_unstable_by_key(|h| h.into_raw_parts());
 }
 
+/// Up to this many candidates, [`node_candidates`] tests their swept boxes before it queries
+/// the tree.
+const FEW_CANDIDATES: usize = 8;
+
 /// Per-node broad phase: the candidates whose BVH boxes overlap `node_box`, as indices into
 /// `candidates`, appended to `out`.
 pub(crate) fn node_candidates(
@@ -446,6 +450,12 @@ pub(crate) fn node_candidates(
                 out.push(k as u32);
             }
         }
+        return;
+    }
+    // A candidate is kept only where its swept box meets the node's: among a few, a node that
+    // meets none (most of a body's surface) needs no query of the tree.
+    let few = candidates.len() <= FEW_CANDIDATES;
+    if few && !candidates.iter().any(|c| c.swept.intersects(&node_box)) {
         return;
     }
     let filter = QueryFilter::default()
