@@ -13,7 +13,8 @@ use super::{RigidHold, StepContext, Touch};
 /// get their state back; the report says which.
 ///
 /// Returns the cell qualities of the state the body ends the step in, when it was sane (one
-/// pass over the cells serves the stretch test and the report), or `None` after a rollback.
+/// pass over the cells serves the stretch test, the report and, for the springs models, the
+/// next step's first forces: [`Deformable::measure_end`]), or `None` after a rollback.
 pub(super) fn contain(
     body: &mut Deformable,
     ctx: &StepContext<'_>,
@@ -53,7 +54,8 @@ pub(super) struct Quality {
 }
 
 impl Quality {
-    /// At the body's positions (`most`: the stretch limit, infinite for none).
+    /// At the body's positions (`most`: the stretch limit, infinite for none), by the body's
+    /// end-of-step measure.
     pub fn of(body: &mut Deformable, most: Real) -> Quality {
         let limited = most.is_finite();
         let (elastic, ratios) = body.measure_end();
