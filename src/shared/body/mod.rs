@@ -266,18 +266,21 @@ impl Deformable {
             memo.velocities.clear();
             memo.velocities.extend_from_slice(v);
             memo.pending = true;
+            memo.dropped = false;
         }
         measured
     }
 
     /// Flows the cells strained past yield over a step of `dt` (plastic bodies only); returns
     /// the elastic energy released. The forces and the energy measured before are stale after
-    /// a flow.
+    /// any cell flowed, even a flow undone.
     pub(crate) fn flow(&mut self, dt: Real) -> Option<Real> {
-        let released = self.state.elements.flow(&self.state.positions, dt)?;
-        self.step.invalidate_forces();
-        self.step.energy_memo.at.clear();
-        Some(released)
+        let (flowed, released) = self.state.elements.flow(&self.state.positions, dt);
+        if flowed {
+            self.step.invalidate_forces();
+            self.step.energy_memo.at.clear();
+        }
+        released
     }
 
     /// The body's tearing ([`DeformableBuilder::tearing`](super::DeformableBuilder::tearing)),
@@ -384,7 +387,8 @@ impl Deformable {
         memo.asked = true;
         if std::mem::take(&mut memo.pending) {
             let (x, v) = (&self.state.positions, &self.state.velocities);
-            memo.fuse = same_bits(&memo.at, x) && same_bits(&memo.velocities, v);
+            // Fusing pays where the kept forces are the ones asked for.
+            memo.fuse = !memo.dropped && same_bits(&memo.at, x) && same_bits(&memo.velocities, v);
             if memo.fuse && memo.forces {
                 std::mem::swap(&mut step.acc, &mut memo.acc);
                 step.limiter = memo.limiter;

@@ -139,21 +139,24 @@ pub(crate) struct StepBuffers {
     /// Whether [`Integrator::Auto`](super::super::Integrator::Auto) steps the body implicitly
     /// this step.
     pub auto_implicit: bool,
-    /// The last measure of [`Deformable::measured_energy`](super::Deformable::measured_energy).
+    /// The last measure of [`Deformable::measured_energy`](super::Deformable::measured_energy),
+    /// and the forces the step's end kept for the next.
     pub energy_memo: EnergyMemo,
 }
 
 /// An elastic energy and the cells' volume ratios, and the positions they were measured at
-/// (none measured yet when empty). The rest data of the body's model does not change after it
-/// is built, so the positions alone say whether the measure still holds.
+/// (none measured yet when empty). Whatever changes the model's rest data or its gas (plastic
+/// flow, a chamber refilled) clears the positions, so the positions alone say whether the
+/// measure still holds.
 ///
 /// The end of an explicit step is where the next step evaluates its first forces, so for a
 /// model that measures in its force pass the step's last measure evaluates those forces too
 /// ([`Deformable::measure_end`](super::Deformable::measure_end)): one pass over the cells
 /// instead of two. They are kept with the velocities they were evaluated at, and taken if the
-/// next evaluation finds the same state, bit for bit; a body whose state changes in between
-/// (a bone moving its bound nodes) evaluates them again, so its next steps measure the energy
-/// alone until a step finds the state it ended in.
+/// next evaluation finds the same state, bit for bit, and nothing dropped them since
+/// ([`StepBuffers::invalidate_forces`]). A body whose state or model changes in between (a
+/// setter, deformation damping, plastic flow, sleep) evaluates them again, and its next steps
+/// measure the energy alone until a step ends where the next starts.
 #[derive(Clone, Debug)]
 pub(crate) struct EnergyMemo {
     pub at: Vec<Vector>,
@@ -170,6 +173,8 @@ pub(crate) struct EnergyMemo {
     pub pending: bool,
     /// Whether the next end-of-step measure evaluates the forces too.
     pub fuse: bool,
+    /// Whether the forces were marked stale since the last end-of-step measure.
+    pub dropped: bool,
     /// Whether the forces were asked for since the last end-of-step measure (the body steps
     /// explicitly).
     pub asked: bool,
@@ -187,6 +192,7 @@ impl Default for EnergyMemo {
             limiter: Real::INFINITY,
             pending: false,
             fuse: true,
+            dropped: false,
             asked: false,
         }
     }
@@ -229,6 +235,7 @@ impl StepBuffers {
     pub fn invalidate_forces(&mut self) {
         self.forces_valid = false;
         self.energy_memo.forces = false;
+        self.energy_memo.dropped = true;
     }
 }
 

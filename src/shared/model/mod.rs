@@ -538,14 +538,19 @@ impl ModelState {
     }
 
     /// Flows the cells strained past yield at `x` over a step of `dt` (`plastic.rs`); returns
-    /// the elastic energy the flow released, `None` if no cell flowed. A flow that would raise
-    /// the energy (a cell flowing along one direction while the volumetric term holds its
-    /// volume, near ν = 0.5; or edges shared with cells that did not flow) is undone: flow
-    /// creates no energy.
-    pub fn flow(&mut self, x: &[Vector], dt: Real) -> Option<Real> {
-        let changed = self.plastic.as_mut()?.flow(x, dt);
+    /// whether any cell flowed, and the elastic energy the flow released (`None` if none
+    /// flowed or the flow was undone). A flow that would raise the energy (a cell flowing
+    /// along one direction while the volumetric term holds its volume, near ν = 0.5; or edges
+    /// shared with cells that did not flow) is undone: flow creates no energy. An undone flow
+    /// brings back the cells' rest shapes, but the rest data derived from them again may
+    /// differ in the last bit (a spring's rest length is the mean over the cells sharing it).
+    pub fn flow(&mut self, x: &[Vector], dt: Real) -> (bool, Option<Real>) {
+        let Some(plastic) = self.plastic.as_mut() else {
+            return (false, None);
+        };
+        let changed = plastic.flow(x, dt);
         if changed.is_empty() {
-            return None;
+            return (false, None);
         }
         // The rest data is still derived from the shapes before the flow.
         let before = elastic_energy(&*self.elements, self.volume.as_ref(), None, x);
@@ -553,13 +558,12 @@ impl ModelState {
         let released = before - elastic_energy(&*self.elements, self.volume.as_ref(), None, x);
         if released < 0.0 {
             if let Some(plastic) = &mut self.plastic {
-                // The same shapes as before the flow: the derived data comes back bit for bit.
                 plastic.undo();
             }
             self.derive_rest(&changed);
-            return None;
+            return (true, None);
         }
-        Some(released)
+        (true, Some(released))
     }
 
     /// Elastic (stored) energy at `x`, the gas's included.
