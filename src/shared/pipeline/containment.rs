@@ -182,6 +182,34 @@ mod tests {
     }
 
     #[test]
+    fn a_body_on_a_moving_bone_keeps_its_forces_from_step_to_step() {
+        use super::super::super::math::Pose;
+        // The bone places its nodes within the step: the next step starts where this one
+        // ended.
+        let mut world = DeformableWorld::new();
+        let bone = world
+            .physics
+            .insert_body(RigidBodyBuilder::kinematic_position_based());
+        let body = DeformableBuilder::cuboid(Vector::splat(0.25), [4; DIM])
+            .model(ElementModel::Springs)
+            .build()
+            .unwrap();
+        let h = world.insert(body);
+        world.attach_nodes(h, bone, &[0, 1, 2]).unwrap();
+        let mut kept = 0;
+        for k in 1..=30 {
+            let mut at = Vector::ZERO;
+            at[0] = 0.01 * k as Real;
+            let pose = Pose::from_translation(at);
+            world.physics.bodies[bone].set_next_kinematic_position(pose);
+            world.step();
+            let memo = &world.deformables.get(h).unwrap().step.energy_memo;
+            kept += usize::from(memo.forces && memo.fuse);
+        }
+        assert!(kept >= 29, "kept forces at {kept} of 30 steps");
+    }
+
+    #[test]
     fn a_body_whose_state_changes_between_steps_stops_keeping_forces_and_takes_it_up_again() {
         let mut world = DeformableWorld::new();
         let body = DeformableBuilder::cuboid(Vector::splat(0.25), [4; DIM])
