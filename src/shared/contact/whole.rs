@@ -47,6 +47,9 @@ struct Row {
     /// The lever arm of the normal impulse ([`normal_lever`]).
     lever: Vector,
     normal: Vector,
+    /// The inverse effective mass along the normal at the lever (the body's mass and inertia
+    /// stay as they are through the passes).
+    normal_inv_mass: Real,
     /// Normal velocity relative to the collider to reach, and the collider's velocity there.
     target: Real,
     collider: Vector,
@@ -122,14 +125,16 @@ pub(crate) fn rigid_answer(
         let arm = c.node_point(x) - centre;
         let collider = cand.anchored_velocity(c.point, c.anchor, at.s1, at.dt, at.motions, bodies);
         let blow = (collider - linear).dot(c.normal) > impact;
+        let lever = if blow {
+            arm
+        } else {
+            normal_lever(arm, c.normal, &outline)
+        };
         Row {
             arm,
-            lever: if blow {
-                arm
-            } else {
-                normal_lever(arm, c.normal, &outline)
-            },
+            lever,
             normal: c.normal,
+            normal_inv_mass: start.inv_mass_at(lever, c.normal),
             target: c.target,
             collider,
             friction: cand.friction,
@@ -143,7 +148,7 @@ pub(crate) fn rigid_answer(
         let mut change: Real = 0.0;
         for row in rows.iter_mut() {
             let n = row.normal;
-            let k = body.inv_mass_at(row.lever, n);
+            let k = row.normal_inv_mass;
             let vn = (body.velocity(row.lever) - row.collider).dot(n);
             let total = (row.normal_impulse + (row.target - vn) / k).max(0.0);
             let dj = total - row.normal_impulse;

@@ -418,7 +418,16 @@ pub(super) fn relative_speed(v: &[Vector]) -> Real {
         return 0.0;
     }
     let mean = v.iter().fold(Vector::ZERO, |s, u| s + *u) / v.len() as Real;
-    let most = v.iter().map(|u| (*u - mean).length()).fold(0.0, Real::max);
+    // The longest deviation by its square (a square root keeps the order), over fixed chunks
+    // (on rayon's threads for a large body): a maximum is exact in any order.
+    let part = |r: std::ops::Range<usize>| {
+        v[r].iter()
+            .map(|u| (*u - mean).length_squared())
+            .fold(0.0, Real::max)
+    };
+    let most = super::super::threads::chunked_fold(v.len(), part, Real::max)
+        .unwrap_or(0.0)
+        .sqrt();
     most * 1.01 + mean.length() * 1e-4
 }
 

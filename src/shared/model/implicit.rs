@@ -591,6 +591,14 @@ impl Solve<'_> {
         let n = x.len();
         let slabs = self.vertex.incidence.slabs(n);
         let kinds = if backward { [1, 0] } else { [0, 1] };
+        #[cfg(feature = "parallel")]
+        if rayon::current_num_threads() > 1
+            && self.vertex.incidence.slab < n
+            && self.vertex.gas.is_none()
+        {
+            self.sweep_flowing(x, kinds);
+            return;
+        }
         for kind in kinds {
             let volumes = self.gas_volumes(x);
             #[cfg(feature = "parallel")]
@@ -602,6 +610,70 @@ impl Solve<'_> {
                 self.sweep_slab(slab, backward, x, &mut volumes.clone());
             }
         }
+    }
+
+    /// [`Solve::sweep_alone`] on rayon's threads without a gas, `kinds` the slabs' kinds in
+    /// sweep order: each slab of the second kind starts as soon as its neighbours of the first
+    /// are swept (they are all it reads that the first kind writes), not when all of them are,
+    /// so a thread that ends its share of the first kind early goes on to the second.
+    #[cfg(feature = "parallel")]
+    fn sweep_flowing(&self, x: &mut [Vector], kinds: [usize; 2]) {
+        use std::sync::atomic::{AtomicU8, Ordering};
+        use std::sync::Mutex;
+        let (slab, backward, n) = (self.vertex.incidence.slab, kinds[0] == 1, x.len());
+        let slabs: Vec<Mutex<&mut [Vector]>> = x.chunks_mut(slab).map(Mutex::new).collect();
+        let count = slabs.len();
+        // Per slab of the second kind, its neighbours of the first still to sweep.
+        let waiting: Vec<AtomicU8> = (0..count)
+            .map(|k| AtomicU8::new(u8::from(k > 0) + u8::from(k + 1 < count)))
+            .collect();
+        let sweep = |k: usize| self.sweep_window(&slabs, n, k, backward);
+        rayon::scope(|s| {
+            for k in (0..count).filter(|k| k % 2 == kinds[0]) {
+                let (sweep, waiting) = (&sweep, &waiting);
+                s.spawn(move |s| {
+                    sweep(k);
+                    for j in [k.wrapping_sub(1), k + 1] {
+                        if j < count && waiting[j].fetch_sub(1, Ordering::AcqRel) == 1 {
+                            s.spawn(move |_| sweep(j));
+                        }
+                    }
+                });
+            }
+        });
+    }
+
+    /// Sweeps slab `k` of `slabs` (of `n` nodes in all) in a copy of itself and its
+    /// neighbours, read at their own indices as the serial sweep reads them, then writes it
+    /// back.
+    #[cfg(feature = "parallel")]
+    fn sweep_window(
+        &self,
+        slabs: &[std::sync::Mutex<&mut [Vector]>],
+        n: usize,
+        k: usize,
+        backward: bool,
+    ) {
+        let slab = self.vertex.incidence.slab;
+        let lock = |j: usize| slabs[j].lock().expect("a slab's lock");
+        let end = ((k + 2) * slab).min(n);
+        // Taken out while in use: a job nested in this one on the same thread starts its own.
+        let mut window = WINDOW.take();
+        if window.len() < end {
+            window.resize(end, Vector::ZERO);
+        }
+        for j in k.saturating_sub(1)..(k + 2).min(slabs.len()) {
+            let nodes = lock(j);
+            window[j * slab..j * slab + nodes.len()].copy_from_slice(&nodes);
+        }
+        let nodes = k * slab..((k + 1) * slab).min(n);
+        in_order(nodes.clone(), backward, |i| {
+            if let Some(p) = self.node_step(i, &window[..end], &mut [], |_, _| {}) {
+                window[i] = p;
+            }
+        });
+        lock(k).copy_from_slice(&window[nodes]);
+        WINDOW.set(window);
     }
 
     /// The slabs of one kind (`kind`: 0 even, 1 odd) at once on rayon's threads.
