@@ -17,15 +17,6 @@ use super::math::Real;
 /// Terms per chunk: enough that a chunk's work outweighs rayon's per-task cost.
 pub(crate) const CHUNK: usize = 1024;
 
-/// Whether loops run on rayon's threads here: feature `parallel` and more than one thread.
-pub(crate) fn several() -> bool {
-    #[cfg(feature = "parallel")]
-    if rayon::current_num_threads() > 1 {
-        return true;
-    }
-    false
-}
-
 /// Runs `f`; with `busy` (and feature `parallel`, and more than one rayon thread), rayon's
 /// other threads poll for work (`rayon::yield_now`) until `f` returns, instead of sleeping
 /// between its parallel loops.

@@ -231,9 +231,9 @@ fn move_positions(
     for &i in live {
         let m = &mut members[i];
         let body = &mut *m.body;
-        for (x, v) in body.state.positions.iter_mut().zip(&body.state.velocities) {
-            *x += *v * h;
-        }
+        // Node by node, on rayon's threads for a large body.
+        let v = &body.state.velocities;
+        threads::for_each_mut(&mut body.state.positions, |i, x| *x += v[i] * h);
         integrator.after_move(body);
         attach::place_on_bones(
             &body.bindings,
@@ -1232,8 +1232,6 @@ fn node_contacts(
     (candidates, rows, mut fixed): ContactRows<'_, '_>,
 ) {
     let surface = body.rest.mesh.boundary_nodes();
-    let (ahead, found) = resolved_ahead(body, (at, backward), broad, candidates, bodies);
-    let mut found = ahead.into_iter().zip(found).peekable();
     for j in 0..surface.len() {
         let k = order(backward, surface.len(), j);
         let i = surface[k];
@@ -1245,17 +1243,21 @@ fn node_contacts(
             continue;
         }
         let n_i = i as usize;
-        let (mut x, resolved) = match found.next_if(|(a, _)| *a as usize == k) {
-            Some((_, ahead)) => ahead,
-            None => {
-                let mut x = body.state.positions[n_i];
-                let node = free_node(body, i);
-                let cands = &broad.node_cands[b0..b1];
-                let c = contact::resolve_node(node, &mut x, at, cands, candidates, bodies);
-                (x, c)
-            }
+        let mut x = body.state.positions[n_i];
+        let node = FreeNode {
+            index: i,
+            v: body.state.velocities[n_i],
+            v_before: body.step.scratch_velocities[n_i],
+            inv_mass: body.rest.inv_masses[n_i],
         };
-        let Some(mut c) = resolved else {
+        let Some(mut c) = contact::resolve_node(
+            node,
+            &mut x,
+            at,
+            &broad.node_cands[b0..b1],
+            candidates,
+            bodies,
+        ) else {
             continue;
         };
         let start = body.state.positions[n_i];
@@ -1267,7 +1269,7 @@ fn node_contacts(
             let cand = &candidates[c.candidate];
             if sharing.split && cand.dynamic {
                 let w_body = cand.inv_mass_at(c.anchor(), c.normal, at.motions, bodies);
-                let share = w_body / (w_body + body.rest.inv_masses[n_i]);
+                let share = w_body / (w_body + node.inv_mass);
                 if share > 0.0 && share.is_finite() {
                     let out = x - start;
                     let timing = (at.s1, at.dt);
@@ -1305,64 +1307,6 @@ fn node_contacts(
             fixed.push(c);
         }
     }
-}
-
-/// Surface node `i` of `body` as its contacts see it.
-fn free_node(body: &Deformable, i: u32) -> FreeNode {
-    let n = i as usize;
-    FreeNode {
-        index: i,
-        v: body.state.velocities[n],
-        v_before: body.step.scratch_velocities[n],
-        inv_mass: body.rest.inv_masses[n],
-    }
-}
-
-/// Fewest nodes [`resolved_ahead`] finds on rayon's threads.
-const AHEAD_MIN: usize = 64;
-
-/// On several threads, the contacts of the free surface nodes whose candidates are none of
-/// them dynamic, found at once before the sweep ([`node_contacts`]): the nodes (indices into
-/// the boundary nodes, in the sweep's order) and each one's position and contact. The sweep
-/// would find the same one by one: a node's contact moves only that node, and moves no
-/// candidate but a dynamic body's. Empty on one thread, or for few nodes.
-#[allow(clippy::type_complexity)]
-fn resolved_ahead(
-    body: &Deformable,
-    (at, backward): (&Substep<'_>, bool),
-    broad: &Broad,
-    candidates: &Candidates<'_>,
-    bodies: &RigidBodySet,
-) -> (Vec<u32>, Vec<(Vector, Option<Contact>)>) {
-    if !threads::several() {
-        return Default::default();
-    }
-    let count = body.rest.mesh.boundary_nodes().len();
-    let cands = |k: usize| {
-        let (b0, b1) = (broad.node_start[k], broad.node_start[k + 1]);
-        &broad.node_cands[b0 as usize..b1 as usize]
-    };
-    let ahead: Vec<u32> = (0..count)
-        .map(|j| order(backward, count, j))
-        .filter(|&k| {
-            let ids = cands(k);
-            !ids.is_empty() && ids.iter().all(|&c| !candidates[c as usize].dynamic)
-        })
-        .map(|k| k as u32)
-        .collect();
-    if ahead.len() < AHEAD_MIN {
-        return Default::default();
-    }
-    let surface = body.rest.mesh.boundary_nodes();
-    let found = threads::collect_in(ahead.len(), AHEAD_MIN / 2, |a| {
-        let k = ahead[a] as usize;
-        let i = surface[k];
-        let mut x = body.state.positions[i as usize];
-        let node = free_node(body, i);
-        let c = contact::resolve_node(node, &mut x, at, cands(k), candidates, bodies);
-        (x, c)
-    });
-    (ahead, found)
 }
 
 /// Smallest quality (volume ratio) a node moved out of a collider may leave a cell of it at,
