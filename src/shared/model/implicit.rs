@@ -209,7 +209,7 @@ impl Positions for [Vector] {
 #[cfg(feature = "parallel")]
 thread_local! {
     /// A thread's copy of the nodes a parallel sweep's slab reads
-    /// ([`Solve::sweep_kind_parallel`]).
+    /// ([`Solve::sweep_flowing`], [`Solve::sweep_kind_parallel`]).
     static WINDOW: std::cell::Cell<Vec<Vector>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
