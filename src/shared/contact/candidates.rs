@@ -41,9 +41,6 @@ pub(crate) struct Candidate<'a> {
     pub local_pose: Pose,
     /// Box swept over the step.
     pub swept: Aabb,
-    /// The collider's box in rapier's broad phase, which its queries test (`None` when the
-    /// broad phase does not index the collider).
-    pub tree_box: Option<Aabb>,
     pub dynamic: bool,
     pub friction: Real,
     pub restitution: Real,
@@ -259,24 +256,12 @@ pub(crate) fn candidate<'a>(
         collider.restitution_combine_rule(),
     );
     let features = features(collider, &pose0, &pose1, region, spacing);
-    let tree_box = scan.indexed.then(|| {
-        let qp = scan.broad_phase.as_query_pipeline(
-            &DefaultQueryDispatcher,
-            bodies,
-            scan.colliders,
-            QueryFilter::default(),
-        );
-        qp.bvh
-            .leaf_node(handle.into_raw_parts().0)
-            .map(|n| n.aabb())
-    });
     Candidate {
         handle,
         collider,
         motion,
         local_pose,
         swept,
-        tree_box: tree_box.flatten(),
         dynamic: motion.is_some_and(|m| motions[m].kind == MotionKind::Dynamic),
         friction,
         restitution,
@@ -469,24 +454,9 @@ pub(crate) fn node_candidates(
     }
     // A candidate is kept only where its swept box meets the node's: among a few, a node that
     // meets none (most of a body's surface) needs no query of the tree.
-    if candidates.len() <= FEW_CANDIDATES {
-        let mut meeting =
-            (0..candidates.len()).filter(|&k| candidates[k].swept.intersects(&node_box));
-        match (meeting.next(), meeting.next()) {
-            (None, _) => return,
-            // One: the tree reports it where its box there meets the node's (each of the
-            // tree's boxes holds its children's), and nothing else is kept.
-            (Some(k), None) if candidates[k].tree_box.is_some() => {
-                if candidates[k]
-                    .tree_box
-                    .is_some_and(|b| b.intersects(&node_box))
-                {
-                    out.push(k as u32);
-                }
-                return;
-            }
-            _ => {}
-        }
+    let few = candidates.len() <= FEW_CANDIDATES;
+    if few && !candidates.iter().any(|c| c.swept.intersects(&node_box)) {
+        return;
     }
     let filter = QueryFilter::default()
         .exclude_sensors()
