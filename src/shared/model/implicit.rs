@@ -208,8 +208,7 @@ impl Positions for [Vector] {
 
 #[cfg(feature = "parallel")]
 thread_local! {
-    /// A thread's copy of the nodes a parallel sweep's slab reads
-    /// ([`Solve::sweep_flowing`], [`Solve::sweep_kind_parallel`]).
+    /// A thread's copy of the nodes a parallel sweep's slab reads ([`Solve::sweep_window`]).
     static WINDOW: std::cell::Cell<Vec<Vector>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
@@ -627,7 +626,7 @@ impl Solve<'_> {
         let waiting: Vec<AtomicU8> = (0..count)
             .map(|k| AtomicU8::new(u8::from(k > 0) + u8::from(k + 1 < count)))
             .collect();
-        let sweep = |k: usize| self.sweep_window(&slabs, n, k, backward);
+        let sweep = |k: usize| self.sweep_window(&slabs, n, k, backward, &mut []);
         rayon::scope(|s| {
             for k in (0..count).filter(|k| k % 2 == kinds[0]) {
                 let (sweep, waiting) = (&sweep, &waiting);
@@ -643,9 +642,10 @@ impl Solve<'_> {
         });
     }
 
-    /// Sweeps slab `k` of `slabs` (of `n` nodes in all) in a copy of itself and its
-    /// neighbours, read at their own indices as the serial sweep reads them, then writes it
-    /// back.
+    /// Sweeps slab `k` of `slabs` (of `n` nodes in all; the gas chambers at `volumes`) in a
+    /// copy of itself and its neighbours, which no slab of its kind writes, then writes it
+    /// back. The copy sits at the nodes' own indices in a buffer of the thread's, so the sweep
+    /// takes the serial sweep's code (read at an offset, it cost 12 % more).
     #[cfg(feature = "parallel")]
     fn sweep_window(
         &self,
@@ -653,11 +653,11 @@ impl Solve<'_> {
         n: usize,
         k: usize,
         backward: bool,
+        volumes: &mut [Real],
     ) {
         let slab = self.vertex.incidence.slab;
         let lock = |j: usize| slabs[j].lock().expect("a slab's lock");
         let end = ((k + 2) * slab).min(n);
-        // Taken out while in use: a job nested in this one on the same thread starts its own.
         let mut window = WINDOW.take();
         if window.len() < end {
             window.resize(end, Vector::ZERO);
@@ -668,7 +668,7 @@ impl Solve<'_> {
         }
         let nodes = k * slab..((k + 1) * slab).min(n);
         in_order(nodes.clone(), backward, |i| {
-            if let Some(p) = self.node_step(i, &window[..end], &mut [], |_, _| {}) {
+            if let Some(p) = self.node_step(i, &window[..end], volumes, |_, _| {}) {
                 window[i] = p;
             }
         });
@@ -676,49 +676,18 @@ impl Solve<'_> {
         WINDOW.set(window);
     }
 
-    /// The slabs of one kind (`kind`: 0 even, 1 odd) at once on rayon's threads.
+    /// The slabs of one kind (`kind`: 0 even, 1 odd) at once on rayon's threads, each from
+    /// the gas chambers' `volumes` where the kind started.
     #[cfg(feature = "parallel")]
     fn sweep_kind_parallel(&self, x: &mut [Vector], kind: usize, backward: bool, volumes: &[Real]) {
         use rayon::prelude::*;
-        let slab = self.vertex.incidence.slab;
-        let mut chunks: Vec<&mut [Vector]> = x.chunks_mut(slab).collect();
-        let mut own: Vec<(usize, &mut [Vector])> = Vec::new();
-        let mut others: Vec<&[Vector]> = Vec::new();
-        for (k, chunk) in chunks.iter_mut().enumerate() {
-            if k % 2 == kind {
-                own.push((k, &mut **chunk));
-                others.push(&[]);
-            } else {
-                others.push(&**chunk);
-            }
-        }
-        // Each slab is swept in a copy of itself and its neighbours (which no slab of its
-        // kind writes), kept at their own indices in a buffer of the thread's, then copied
-        // back: read at their own indices, they take the serial sweep's code (read at an
-        // offset, the sweep cost 12 % more).
-        own.into_par_iter().for_each(|(k, own)| {
-            let before = if k > 0 { others[k - 1] } else { &[] };
-            let after = others.get(k + 1).copied().unwrap_or(&[]);
-            let nodes = k * slab..k * slab + own.len();
-            let (start, end) = (nodes.start - before.len(), nodes.end + after.len());
-            // Taken out while in use: a job nested in this one on the same thread starts its
-            // own.
-            let mut window = WINDOW.take();
-            if window.len() < end {
-                window.resize(end, Vector::ZERO);
-            }
-            window[start..nodes.start].copy_from_slice(before);
-            window[nodes.clone()].copy_from_slice(own);
-            window[nodes.end..end].copy_from_slice(after);
-            let mut volumes = volumes.to_vec();
-            in_order(nodes.clone(), backward, |i| {
-                if let Some(p) = self.node_step(i, &window[..end], &mut volumes, |_, _| {}) {
-                    window[i] = p;
-                }
-            });
-            own.copy_from_slice(&window[nodes]);
-            WINDOW.set(window);
-        });
+        let (slab, n) = (self.vertex.incidence.slab, x.len());
+        let slabs: Vec<std::sync::Mutex<&mut [Vector]>> =
+            x.chunks_mut(slab).map(std::sync::Mutex::new).collect();
+        (0..slabs.len())
+            .into_par_iter()
+            .filter(|k| k % 2 == kind)
+            .for_each(|k| self.sweep_window(&slabs, n, k, backward, &mut volumes.to_vec()));
     }
 
     /// Steps the nodes of `slab` in node order (`backward`: last first).
