@@ -125,6 +125,27 @@ pub(crate) fn chunked_fold<T: Send>(
     (0..chunks).map(chunk).reduce(combine)
 }
 
+/// The largest `value(i)` over `0..count`, at least 0 (a NaN is passed over). `max` is exact,
+/// so any order gives the same bits: four running maxima per chunk, so that the comparisons
+/// do not wait on each other, and the chunks on rayon's threads for a large body.
+pub(crate) fn largest(count: usize, value: impl Fn(usize) -> Real + Sync) -> Real {
+    let part = |r: Range<usize>| {
+        let mut most: [Real; 4] = [0.0; 4];
+        let mut i = r.start;
+        while i + 4 <= r.end {
+            for (k, m) in most.iter_mut().enumerate() {
+                *m = m.max(value(i + k));
+            }
+            i += 4;
+        }
+        for j in i..r.end {
+            most[0] = most[0].max(value(j));
+        }
+        most.into_iter().fold(0.0, Real::max)
+    };
+    chunked_fold(count, part, Real::max).unwrap_or(0.0)
+}
+
 /// Whether `test(i)` holds for every `i` in `0..count` (on rayon's threads when there are
 /// several chunks and threads).
 pub(crate) fn all(count: usize, test: impl Fn(usize) -> bool + Sync) -> bool {

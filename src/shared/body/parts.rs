@@ -9,7 +9,7 @@ use super::super::contact::soft_terms::Memory;
 use super::super::contact::ContactPoint;
 use super::super::integrator::MidpointState;
 use super::super::material::Resolved;
-use super::super::math::{Real, Vector, DIM};
+use super::super::math::{Real, Vector, DIM, FACET_ARITY};
 use super::super::mesh::Mesh;
 use super::super::model::volume::Ratios;
 use super::super::model::{Accumulator, ElementModel, ModelState, Slack};
@@ -30,6 +30,9 @@ pub(crate) struct Rest {
     pub inv_masses: Vec<Real>,
     /// The facets each surface node leaves alone in self contact, made when first needed.
     near_facets: OnceLock<NearFacets>,
+    /// The surface's edges (the boundary facets' node pairs), each once, made when first
+    /// needed.
+    surface_edges: OnceLock<Vec<[u32; 2]>>,
     /// The interior faces, found when a tearing body first checks them.
     pub(super) faces: OnceLock<super::tear::Faces>,
     /// How far the node bounds overestimate the body's highest frequencies, measured when
@@ -57,6 +60,7 @@ impl Rest {
             masses,
             inv_masses,
             near_facets: OnceLock::new(),
+            surface_edges: OnceLock::new(),
             faces: OnceLock::new(),
             slack: OnceLock::new(),
         }
@@ -97,6 +101,23 @@ impl Rest {
     /// neighbours'), made on first use.
     pub fn near_facets(&self) -> &NearFacets {
         self.near_facets.get_or_init(|| NearFacets::new(&self.mesh))
+    }
+
+    /// The surface's edges, each once (lower node first, ascending), made on first use.
+    pub fn surface_edges(&self) -> &[[u32; 2]] {
+        self.surface_edges.get_or_init(|| {
+            let mut edges: Vec<[u32; 2]> = Vec::new();
+            for f in self.mesh.boundary_facets() {
+                for a in 0..FACET_ARITY {
+                    for b in a + 1..FACET_ARITY {
+                        edges.push([f[a].min(f[b]), f[a].max(f[b])]);
+                    }
+                }
+            }
+            edges.sort_unstable();
+            edges.dedup();
+            edges
+        })
     }
 }
 

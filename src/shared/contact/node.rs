@@ -392,15 +392,16 @@ fn feature_normal(shape: &dyn Shape, proj: PointProjection, feature: FeatureId) 
         .map(|n| pose.rotation * n)
 }
 
-/// Depth of `x` inside the deepest of the given candidates (zero when outside all).
+/// Depth of `x` inside the deepest of the given candidates (zero when outside all), measured
+/// in each collider's frame (a rigid pose keeps lengths).
 pub(crate) fn penetration(x: Vector, candidate_ids: &[u32], candidates: &[Candidate<'_>]) -> Real {
     let mut deepest: Real = 0.0;
     for &ci in candidate_ids {
         let cand = &candidates[ci as usize];
-        let shape = cand.collider.shape();
-        let proj = shape.project_point(&cand.pose, x, false);
+        let local = cand.pose.inverse_transform_point(x);
+        let proj = cand.collider.shape().project_local_point(local, false);
         if proj.is_inside {
-            deepest = deepest.max((proj.point - x).length());
+            deepest = deepest.max((proj.point - local).length());
         }
     }
     deepest

@@ -63,8 +63,7 @@ pub(super) fn diagnose(
 /// energy came with the cells' quality, [`diagnose`]).
 pub(super) fn energies(body: &mut Deformable, ctx: &StepContext<'_>) {
     let g = ctx.gravity * body.gravity_scale;
-    let kinetic = body.kinetic_energy();
-    let gravity_energy = body.gravity_energy(g);
+    let (kinetic, gravity_energy) = body.kinetic_and_gravity_energy(g);
     let r = &mut body.last.report;
     r.kinetic_energy = kinetic;
     r.gravity_energy = gravity_energy;

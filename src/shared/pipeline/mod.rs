@@ -69,7 +69,7 @@ use super::events::{DeformableContactEvent, DeformableEventHandler};
 use super::integrator::{Integrator, AUTO_GLOBAL_ITERATIONS, AUTO_SUBSTEPS, GLOBAL_SUBSTEPS};
 use super::math::{Real, Vector};
 use super::rapier::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
-use super::rapier::geometry::{BroadPhaseBvh, ColliderHandle, ColliderSet};
+use super::rapier::geometry::{Aabb, BroadPhaseBvh, ColliderHandle, ColliderSet};
 use super::report::StepReport;
 use super::set::{DeformableHandle, DeformableSet};
 use super::threads;
@@ -259,6 +259,8 @@ struct Broad {
     near: Vec<ColliderHandle>,
     motions: Vec<BodyMotion>,
     attached_bodies: Vec<RigidBodyHandle>,
+    /// Per surface node: the box it sweeps over the step as its velocity predicts.
+    swept: Vec<Aabb>,
     /// Per surface node (CSR): candidate indices.
     node_start: Vec<u32>,
     node_cands: Vec<u32>,

@@ -4,9 +4,10 @@
 use super::super::body::Deformable;
 use super::super::contact::{self, Candidate, Scan};
 use super::super::coupling::BodyMotion;
-use super::super::math::{Real, Vector, FACET_ARITY};
+use super::super::math::{Real, Vector};
 use super::super::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
 use super::super::rapier::geometry::{Aabb, BoundingVolume};
+use super::super::threads;
 use super::{Candidates, Scratch, StepContext};
 
 /// The index of `handle`'s motion in `motions`, added if it is not there yet (`None`: the body
@@ -61,32 +62,33 @@ pub(super) fn prepare<'a>(
 
     // Broad phase, once per deformable and then once per surface node.
     let surface = body.rest.mesh.boundary_nodes();
-    let facets = body.rest.mesh.boundary_facets();
-    let mut region = Aabb::new_invalid();
-    for &i in surface {
-        let i = i as usize;
-        swept(
-            &mut region,
-            body.state.positions[i],
-            body.state.velocities[i],
-            g,
-            dt,
-        );
-    }
+    let (x, v) = (&body.state.positions, &body.state.velocities);
+    sc.broad.swept.clear();
+    sc.broad.swept.extend(surface.iter().map(|&i| {
+        let mut b = Aabb::new_invalid();
+        swept(&mut b, x[i as usize], v[i as usize], g, dt);
+        b
+    }));
+    let region = sc
+        .broad
+        .swept
+        .iter()
+        .fold(Aabb::new_invalid(), |r, b| r.merged(b));
     // The shortest surface edge, by its square: the square root of the least square is the
-    // least of the square roots, bit for bit (it rounds correctly and never decreases). One
-    // running least per edge of a facet, so that the facets' comparisons do not wait on each
-    // other; `min` passes over a NaN and is exact, so any order gives the same least.
-    let mut least = [Real::INFINITY; FACET_ARITY * (FACET_ARITY - 1) / 2];
+    // least of the square roots, bit for bit (it rounds correctly and never decreases). Four
+    // running leasts, so that the comparisons do not wait on each other; `min` passes over a
+    // NaN and is exact, so any order gives the same least.
+    let mut least = [Real::INFINITY; 4];
     let x = &body.state.positions;
-    for f in facets {
-        let mut k = 0;
-        for a in 0..FACET_ARITY {
-            for b in a + 1..FACET_ARITY {
-                least[k] = least[k].min(x[f[a] as usize].distance_squared(x[f[b] as usize]));
-                k += 1;
-            }
+    let edges = body.rest.surface_edges();
+    let mut quads = edges.chunks_exact(4);
+    for q in &mut quads {
+        for (l, [a, b]) in least.iter_mut().zip(q) {
+            *l = l.min(x[*a as usize].distance_squared(x[*b as usize]));
         }
+    }
+    for (l, [a, b]) in least.iter_mut().zip(quads.remainder()) {
+        *l = l.min(x[*a as usize].distance_squared(x[*b as usize]));
     }
     let shortest = least.iter().fold(Real::INFINITY, |m, &d| m.min(d)).sqrt();
     // Element forces can turn a node around within the step: widen every box by a quarter
@@ -97,13 +99,8 @@ pub(super) fn prepare<'a>(
     let size = (region.maxs - region.mins).max_element().max(1e-3);
     let turning = if ctx.settings.integrator.steps_implicitly(body) {
         // The largest length by its square (a square root keeps the order): the same bits.
-        let fastest = body
-            .state
-            .velocities
-            .iter()
-            .map(|v| v.length_squared())
-            .fold(0.0, Real::max)
-            .sqrt();
+        let v = &body.state.velocities;
+        let fastest = threads::largest(v.len(), |i| v[i].length_squared()).sqrt();
         (fastest + g.length() * dt) * dt
     } else {
         0.0
@@ -117,12 +114,8 @@ pub(super) fn prepare<'a>(
     } else {
         body.refresh_forces();
         let (force, inv) = (&body.step.acc.force, &body.rest.inv_masses);
-        let fastest = force
-            .iter()
-            .zip(inv)
-            .map(|(f, w)| (*f * *w).length_squared())
-            .fold(0.0, Real::max)
-            .sqrt();
+        let fastest =
+            threads::largest(force.len(), |i| (force[i] * inv[i]).length_squared()).sqrt();
         0.5 * fastest * dt * dt
     };
     let node_margin = if shortest.is_finite() {
@@ -182,16 +175,8 @@ fn tables(
     sc.broad.node_start.clear();
     sc.broad.node_cands.clear();
     sc.broad.node_start.push(0);
-    for &i in surface {
+    for (&i, b) in surface.iter().zip(&sc.broad.swept) {
         if !candidates.is_empty() && !body.is_attached(i) {
-            let mut b = Aabb::new_invalid();
-            swept(
-                &mut b,
-                body.state.positions[i as usize],
-                body.state.velocities[i as usize],
-                g,
-                dt,
-            );
             contact::node_candidates(
                 scan,
                 b.loosened(widen),
