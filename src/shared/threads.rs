@@ -129,21 +129,38 @@ pub(crate) fn chunked_fold<T: Send>(
 /// so any order gives the same bits: four running maxima per chunk, so that the comparisons
 /// do not wait on each other, and the chunks on rayon's threads for a large body.
 pub(crate) fn largest(count: usize, value: impl Fn(usize) -> Real + Sync) -> Real {
+    extreme(count, 0.0, |a: Real, b| a.max(b), value)
+}
+
+/// The least `value(i)` over `0..count`, at most infinity (a NaN is passed over), as
+/// [`largest`].
+pub(crate) fn least(count: usize, value: impl Fn(usize) -> Real + Sync) -> Real {
+    extreme(count, Real::INFINITY, |a: Real, b| a.min(b), value)
+}
+
+/// `value(i)` over `0..count` combined from `start` by `pick` (an exact, order-free choice: a
+/// minimum or a maximum), in four running picks per chunk.
+fn extreme(
+    count: usize,
+    start: Real,
+    pick: impl Fn(Real, Real) -> Real + Copy + Sync,
+    value: impl Fn(usize) -> Real + Sync,
+) -> Real {
     let part = |r: Range<usize>| {
-        let mut most: [Real; 4] = [0.0; 4];
+        let mut best = [start; 4];
         let mut i = r.start;
         while i + 4 <= r.end {
-            for (k, m) in most.iter_mut().enumerate() {
-                *m = m.max(value(i + k));
+            for (k, b) in best.iter_mut().enumerate() {
+                *b = pick(*b, value(i + k));
             }
             i += 4;
         }
         for j in i..r.end {
-            most[0] = most[0].max(value(j));
+            best[0] = pick(best[0], value(j));
         }
-        most.into_iter().fold(0.0, Real::max)
+        best.into_iter().fold(start, pick)
     };
-    chunked_fold(count, part, Real::max).unwrap_or(0.0)
+    chunked_fold(count, part, pick).unwrap_or(start)
 }
 
 /// Whether `test(i)` holds for every `i` in `0..count` (on rayon's threads when there are

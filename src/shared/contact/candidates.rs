@@ -430,12 +430,15 @@ pub(crate) fn near_colliders(
     out.sort_unstable_by_key(|h| h.into_raw_parts());
 }
 
-/// Up to this many candidates, [`node_candidates`] tests their swept boxes before it queries
-/// the tree.
+/// Up to this many candidates, [`node_candidates`] tests each one's swept box rather than
+/// query the tree.
 const FEW_CANDIDATES: usize = 8;
 
-/// Per-node broad phase: the candidates whose BVH boxes overlap `node_box`, as indices into
-/// `candidates`, appended to `out`.
+/// Per-node broad phase: the candidates whose swept boxes meet `node_box`, as indices into
+/// `candidates`, appended to `out`. Among a few the boxes are tested one by one, which is
+/// cheaper than a query of the tree; among many the tree picks those near the node first.
+/// (The tree's boxes are rapier's, from its last step, and may lag a moving collider's swept
+/// box: among many, a candidate must be near the node in both.)
 pub(crate) fn node_candidates(
     scan: &Scan<'_>,
     node_box: Aabb,
@@ -444,18 +447,12 @@ pub(crate) fn node_candidates(
 ) {
     let (material, bodies, colliders) = (scan.material, scan.bodies, scan.colliders);
     let (indexed, broad_phase) = (scan.indexed, scan.broad_phase);
-    if !indexed {
+    if !indexed || candidates.len() <= FEW_CANDIDATES {
         for (k, c) in candidates.iter().enumerate() {
             if c.swept.intersects(&node_box) {
                 out.push(k as u32);
             }
         }
-        return;
-    }
-    // A candidate is kept only where its swept box meets the node's: among a few, a node that
-    // meets none (most of a body's surface) needs no query of the tree.
-    let few = candidates.len() <= FEW_CANDIDATES;
-    if few && !candidates.iter().any(|c| c.swept.intersects(&node_box)) {
         return;
     }
     let filter = QueryFilter::default()

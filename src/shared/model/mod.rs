@@ -677,19 +677,19 @@ pub(crate) fn stable_substeps(
         }
     };
     // The least over fixed chunks (on rayon's threads for a large body): a minimum is exact
-    // in any order.
-    let part = |r: std::ops::Range<usize>| {
-        let (mut estimate, mut certain) = (Real::INFINITY, Real::INFINITY);
-        for i in r {
-            let (m, s, d) = (masses[i], stiffness[i], damping[i]);
-            estimate = estimate.min(node(m, s / slack.stiffness, d / slack.damping));
-            certain = certain.min(node(m, s, d));
-        }
-        (estimate, certain)
-    };
+    // in any order. Without slack (both factors 1, dividing by which is exact) the estimate
+    // is the certain bound, bit for bit, and is not evaluated twice.
     let count = masses.len().min(stiffness.len()).min(damping.len());
-    super::threads::chunked_fold(count, part, |a, b| (a.0.min(b.0), a.1.min(b.1)))
-        .unwrap_or((Real::INFINITY, Real::INFINITY))
+    let certain = super::threads::least(count, |i| node(masses[i], stiffness[i], damping[i]));
+    let estimate = if slack.stiffness == 1.0 && slack.damping == 1.0 {
+        certain
+    } else {
+        super::threads::least(count, |i| {
+            let (s, d) = (stiffness[i] / slack.stiffness, damping[i] / slack.damping);
+            node(masses[i], s, d)
+        })
+    };
+    (estimate, certain)
 }
 
 /// The substep under `safety` from the bounds of [`stable_substeps`]: the estimate times

@@ -21,8 +21,7 @@ pub(super) fn contain(
     bodies: &mut RigidBodySet,
     (rigid, touch): (&RigidHold, &mut Touch),
 ) -> Option<Quality> {
-    let sane = |v: &Vector| v.is_finite() && v.abs().max_element() < 1e8;
-    let finite = body.state.positions.iter().all(sane) && body.state.velocities.iter().all(sane);
+    let finite = within(&body.state.positions, 1e8) && within(&body.state.velocities, 1e8);
     let most = ctx.settings.max_stretch.powi(DIM as i32);
     let quality = finite.then(|| Quality::of(body, most));
     let exploded = quality.is_some_and(|q| q.stretched);
@@ -37,6 +36,16 @@ pub(super) fn contain(
         touch.pushed.clear();
     }
     quality.filter(|_| !exploded)
+}
+
+/// Whether every component of `values` is finite and below `bound` in magnitude: 64 vectors at
+/// a time without a branch each, so that the comparisons vectorize.
+fn within(values: &[Vector], bound: Real) -> bool {
+    values.chunks(64).all(|chunk| {
+        chunk
+            .iter()
+            .fold(true, |ok, v| ok & v.abs().cmplt(Vector::splat(bound)).all())
+    })
 }
 
 /// The cells' quality (signed volume over rest volume) over a body, and its elastic energy
