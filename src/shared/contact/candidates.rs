@@ -286,9 +286,16 @@ fn features(
 ) -> Vec<Feature> {
     let shape = collider.shape();
     let mut out = Vec::new();
+    // A still collider's two poses are one.
+    let poses: &[&Pose] = if pose0 == pose1 {
+        &[pose0]
+    } else {
+        &[pose0, pose1]
+    };
     let near = |p: Vector| {
-        region.contains_local_point(pose0.transform_point(p))
-            || region.contains_local_point(pose1.transform_point(p))
+        poses
+            .iter()
+            .any(|pose| region.contains_local_point(pose.transform_point(p)))
     };
     let polytope =
         |points: &[Vector], edges: &[[usize; 2]], radius: Real, out: &mut Vec<Feature>| {
@@ -303,7 +310,7 @@ fn features(
                 let (pa, pb) = (points[a], points[b]);
                 // Clip the edge (in the world, at both poses) to the region, then sample it.
                 let mut range: Option<(Real, Real)> = None;
-                for pose in [pose0, pose1] {
+                for pose in poses {
                     let (wa, wb) = (pose.transform_point(pa), pose.transform_point(pb));
                     let len = (wb - wa).length();
                     if len <= Real::EPSILON {
@@ -439,22 +446,28 @@ const FEW_CANDIDATES: usize = 8;
 /// cheaper than a query of the tree; among many the tree picks those near the node first.
 /// (The tree's boxes are rapier's, from its last step, and may lag a moving collider's swept
 /// box: among many, a candidate must be near the node in both.)
+#[inline]
 pub(crate) fn node_candidates(
     scan: &Scan<'_>,
     node_box: Aabb,
     candidates: &[Candidate<'_>],
     out: &mut Vec<u32>,
 ) {
-    let (material, bodies, colliders) = (scan.material, scan.bodies, scan.colliders);
-    let (indexed, broad_phase) = (scan.indexed, scan.broad_phase);
-    if !indexed || candidates.len() <= FEW_CANDIDATES {
+    if !scan.indexed || candidates.len() <= FEW_CANDIDATES {
         for (k, c) in candidates.iter().enumerate() {
             if c.swept.intersects(&node_box) {
                 out.push(k as u32);
             }
         }
-        return;
+    } else {
+        near_in_tree(scan, node_box, candidates, out);
     }
+}
+
+/// [`node_candidates`] among many: those the tree finds near `node_box`.
+fn near_in_tree(scan: &Scan<'_>, node_box: Aabb, candidates: &[Candidate<'_>], out: &mut Vec<u32>) {
+    let (material, bodies, colliders) = (scan.material, scan.bodies, scan.colliders);
+    let broad_phase = scan.broad_phase;
     let filter = QueryFilter::default()
         .exclude_sensors()
         .groups(material.groups);

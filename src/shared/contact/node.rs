@@ -399,7 +399,14 @@ pub(crate) fn penetration(x: Vector, candidate_ids: &[u32], candidates: &[Candid
     for &ci in candidate_ids {
         let cand = &candidates[ci as usize];
         let local = cand.pose.inverse_transform_point(x);
-        let proj = cand.collider.shape().project_local_point(local, false);
+        let shape = cand.collider.shape();
+        // A point in a box is as deep as its nearest face (negative outside): the common
+        // ground and wall, measured without a general projection.
+        if let Some(cuboid) = shape.as_cuboid() {
+            deepest = deepest.max((cuboid.half_extents - local.abs()).min_element());
+            continue;
+        }
+        let proj = shape.project_local_point(local, false);
         if proj.is_inside {
             deepest = deepest.max((proj.point - local).length());
         }
