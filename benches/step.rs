@@ -21,7 +21,7 @@
 //! cargo bench --bench step -- 'element_update_3d/'  # one group
 //! ```
 //!
-//! A fourth group, `scaling_3d`, steps a resting cube of 750 to 998 250 tetrahedra (6, 11,
+//! A fourth group, `scaling_3d`, steps a resting cube of 1 296 to 998 250 tetrahedra (7, 11,
 //! 21 and 56 nodes per edge; `SINEW_BENCH_SCALING` to choose) for edge repulsion, shape
 //! matching and springs (one explicit substep of `0.4 ms / (res − 1)`) and for edge repulsion
 //! under `Integrator::Implicit { iterations: 2 }` at 60 Hz: `elem/s` is cells per second, and
@@ -63,10 +63,10 @@ fn resolutions() -> Vec<usize> {
     resolutions_from("SINEW_BENCH_RES", &[5], &[5, 9, 17, 33])
 }
 
-/// The scaling group's resolutions: `SINEW_BENCH_SCALING`, else 6 in test mode, else 6, 11,
-/// 21, 56 (750 to 998 250 tetrahedra).
+/// The scaling group's resolutions: `SINEW_BENCH_SCALING`, else 6 in test mode, else 7, 11,
+/// 21, 56 (1 296 to 998 250 tetrahedra: 10³ to 10⁶).
 fn scaling_resolutions() -> Vec<usize> {
-    resolutions_from("SINEW_BENCH_SCALING", &[6], &[6, 11, 21, 56])
+    resolutions_from("SINEW_BENCH_SCALING", &[6], &[7, 11, 21, 56])
 }
 
 /// Heap bytes in use (glibc's `mallinfo2`; 0 elsewhere): unlike the resident size, it does not
