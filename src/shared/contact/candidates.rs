@@ -54,6 +54,9 @@ pub(crate) struct Candidate<'a> {
     pub shift: Vector,
     /// Pose at the start of the current substep.
     pub prev_pose: Pose,
+    /// The box the collider sweeps over the current substep (from `prev_pose` to `pose`),
+    /// loosened by 0.1 mm.
+    pub substep_box: Aabb,
     /// Fractions of the step at the start and at the end of the current substep.
     pub start: Real,
     pub end: Real,
@@ -103,6 +106,7 @@ impl Candidate<'_> {
     /// velocity of a dynamic body.
     pub fn update(&mut self, s1: Real, dt: Real, motions: &[BodyMotion], bodies: &RigidBodySet) {
         self.pose = self.pose_at(s1, dt, motions, bodies);
+        self.substep_box = substep_box(self.collider, &self.prev_pose, &self.pose);
         self.shift = match self.rigid(motions).and_then(|b| bodies.get(b)) {
             // Rapier moves the centre of mass by `linvel · t` and turns about it.
             Some(rb) => (rb.linvel() + self.drift * (0.5 * s1)) * (s1 * dt),
@@ -147,11 +151,11 @@ impl Candidate<'_> {
                 .map_or(Vector::ZERO, |rb| {
                     rb.velocity_at_point(anchor) + self.drift * s
                 }),
-            Some(m) => {
+            Some(m) if motions[m].kind != MotionKind::Fixed => {
                 let body_pose = motions[m].pose_at(s, dt, bodies);
                 motions[m].point_velocity(p, &body_pose, dt, bodies)
             }
-            None => Vector::ZERO,
+            _ => Vector::ZERO,
         }
     }
 
@@ -270,10 +274,23 @@ pub(crate) fn candidate<'a>(
         pose: pose0,
         shift: Vector::ZERO,
         prev_pose: pose0,
+        substep_box: substep_box(collider, &pose0, &pose0),
         start: 0.0,
         end: 0.0,
         found: None,
     }
+}
+
+/// The box `collider` sweeps from `p0` to `p1` (a still one's box once), loosened by 0.1 mm.
+fn substep_box(collider: &Collider, p0: &Pose, p1: &Pose) -> Aabb {
+    let shape = collider.shape();
+    let end = shape.compute_aabb(p1);
+    let swept = if p0 == p1 {
+        end
+    } else {
+        shape.compute_aabb(p0).merged(&end)
+    };
+    swept.loosened(1e-4)
 }
 
 /// Point features of a collider that can reach `region` during the step.

@@ -80,14 +80,7 @@ pub(crate) fn resolve_node(
         let cand = &candidates[ci];
         let shape = cand.collider.shape();
         let (p0, p1) = (&cand.prev_pose, &cand.pose);
-        // (A still collider's box once.)
-        let end_box = shape.compute_aabb(p1);
-        let swept = if p0 == p1 {
-            end_box
-        } else {
-            shape.compute_aabb(p0).merged(&end_box)
-        };
-        if !swept.loosened(1e-4).intersects(&seg) {
+        if !cand.substep_box.intersects(&seg) {
             continue;
         }
         let a = p0.inverse_transform_point(start);
