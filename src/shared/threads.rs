@@ -126,8 +126,9 @@ pub(crate) fn chunked_fold<T: Send>(
 }
 
 /// The largest `value(i)` over `0..count`, at least 0 (a NaN is passed over). `max` is exact,
-/// so any order gives the same bits: four running maxima per chunk, so that the comparisons
-/// do not wait on each other, and the chunks on rayon's threads for a large body.
+/// so for values that are never −0 any order gives the same bits: four running maxima per
+/// chunk, so that the comparisons do not wait on each other, and the chunks on rayon's threads
+/// for a large body.
 pub(crate) fn largest(count: usize, value: impl Fn(usize) -> Real + Sync) -> Real {
     extreme(count, 0.0, |a: Real, b| a.max(b), value)
 }
@@ -138,8 +139,8 @@ pub(crate) fn least(count: usize, value: impl Fn(usize) -> Real + Sync) -> Real 
     extreme(count, Real::INFINITY, |a: Real, b| a.min(b), value)
 }
 
-/// `value(i)` over `0..count` combined from `start` by `pick` (an exact, order-free choice: a
-/// minimum or a maximum), in four running picks per chunk.
+/// `value(i)` over `0..count` combined from `start` by `pick` (an exact choice, a minimum or a
+/// maximum, order-free but for the sign of a zero), in four running picks per chunk.
 fn extreme(
     count: usize,
     start: Real,

@@ -55,7 +55,8 @@ pub(crate) struct Candidate<'a> {
     /// Pose at the start of the current substep.
     pub prev_pose: Pose,
     /// The box the collider sweeps over the current substep (from `prev_pose` to `pose`),
-    /// loosened by 0.1 mm.
+    /// loosened by 0.1 mm: [`Candidate::update`] makes it, and every change of the poses ends
+    /// there.
     pub substep_box: Aabb,
     /// Fractions of the step at the start and at the end of the current substep.
     pub start: Real,

@@ -259,7 +259,8 @@ struct Broad {
     near: Vec<ColliderHandle>,
     motions: Vec<BodyMotion>,
     attached_bodies: Vec<RigidBodyHandle>,
-    /// Per surface node: the box it sweeps over the step as its velocity predicts.
+    /// Per surface node: the box it sweeps over the step as its velocity predicts (made for
+    /// the broad phase, and stale once the substeps move the nodes).
     swept: Vec<Aabb>,
     /// Per surface node (CSR): candidate indices.
     node_start: Vec<u32>,

@@ -114,8 +114,8 @@ pub(super) fn prepare<'a>(
     } else {
         body.refresh_forces();
         let (force, inv) = (&body.step.acc.force, &body.rest.inv_masses);
-        let fastest =
-            threads::largest(force.len(), |i| (force[i] * inv[i]).length_squared()).sqrt();
+        let nodes = force.len().min(inv.len());
+        let fastest = threads::largest(nodes, |i| (force[i] * inv[i]).length_squared()).sqrt();
         0.5 * fastest * dt * dt
     };
     let node_margin = if shortest.is_finite() {

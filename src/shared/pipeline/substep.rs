@@ -584,7 +584,7 @@ fn next_substep(
     for &i in live {
         let m = &mut members[i];
         if integrator.uses_forces(m.body) {
-            // (Current forces, kept from the step's end, take no time to time.)
+            // (Forces already current, as the broad phase left them, cost nothing here.)
             if !m.body.step.forces_valid {
                 timed(&mut m.times.forces, || m.body.refresh_forces());
             }
