@@ -75,22 +75,14 @@ pub(super) fn prepare<'a>(
         .iter()
         .fold(Aabb::new_invalid(), |r, b| r.merged(b));
     // The shortest surface edge, by its square: the square root of the least square is the
-    // least of the square roots, bit for bit (it rounds correctly and never decreases). Four
-    // running leasts, so that the comparisons do not wait on each other; `min` passes over a
-    // NaN and is exact, so any order gives the same least.
-    let mut least = [Real::INFINITY; 4];
+    // least of the square roots, bit for bit (it rounds correctly and never decreases).
     let x = &body.state.positions;
     let edges = body.rest.surface_edges();
-    let mut quads = edges.chunks_exact(4);
-    for q in &mut quads {
-        for (l, [a, b]) in least.iter_mut().zip(q) {
-            *l = l.min(x[*a as usize].distance_squared(x[*b as usize]));
-        }
-    }
-    for (l, [a, b]) in least.iter_mut().zip(quads.remainder()) {
-        *l = l.min(x[*a as usize].distance_squared(x[*b as usize]));
-    }
-    let shortest = least.iter().fold(Real::INFINITY, |m, &d| m.min(d)).sqrt();
+    let shortest = threads::least(edges.len(), |e| {
+        let [a, b] = edges[e];
+        x[a as usize].distance_squared(x[b as usize])
+    })
+    .sqrt();
     // Element forces can turn a node around within the step: widen every box by a quarter
     // of the shortest surface edge, on top of the motion predicted from the velocities. The
     // implicit step turns nodes around over a whole frame: a node may end it as fast as the
